@@ -1,0 +1,285 @@
+"""Unit tests of common.py: each helper against a brute-force reference."""
+
+import dataclasses
+import subprocess
+import sys
+import textwrap
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+import torch
+
+import common
+
+
+# --- brute-force references: explicit sums, one env column at a time ---------
+
+
+def episode_end(terminated, truncated, t):
+    """Index of the step that ends the episode containing t (or T-1 if the rollout ends first)."""
+    T = len(terminated)
+    k = t
+    while k < T - 1 and not (terminated[k] or truncated[k]):
+        k += 1
+    return k
+
+
+def brute_returns(r, nv, term, trunc, gamma):
+    """G_t = sum_{k=t}^{end} gamma^(k-t) r_k  (+ gamma^(end-t+1) V(s_end+1) unless terminated)."""
+    T, N = r.shape
+    out = np.zeros((T, N))
+    for n in range(N):
+        for t in range(T):
+            end = episode_end(term[:, n], trunc[:, n], t)
+            g = sum(gamma ** (k - t) * r[k, n] for k in range(t, end + 1))
+            if not term[end, n]:
+                g += gamma ** (end - t + 1) * nv[end, n]
+            out[t, n] = g
+    return out
+
+
+def brute_gae(r, v, nv, term, trunc, gamma, lam):
+    """A_t = sum_{k=t}^{end} (gamma*lam)^(k-t) delta_k, delta_k = r_k + gamma*V(s_k+1)*(1-term_k) - V(s_k)."""
+    T, N = r.shape
+    out = np.zeros((T, N))
+    for n in range(N):
+        for t in range(T):
+            end = episode_end(term[:, n], trunc[:, n], t)
+            out[t, n] = sum((gamma * lam) ** (k - t) * (r[k, n] + gamma * nv[k, n] * (1 - term[k, n]) - v[k, n])
+                            for k in range(t, end + 1))
+    return out
+
+
+def rollout(T=12, N=4, seed=0):
+    """Random (T, N) rollout where env 1 is truncated mid-rollout, env 2 terminated,
+    env 3 truncated and terminated at once (termination wins), env 0 runs through."""
+    g = np.random.default_rng(seed)
+    r, v, nv = g.normal(size=(3, T, N))
+    term = np.zeros((T, N), dtype=bool)
+    trunc = np.zeros((T, N), dtype=bool)
+    trunc[4, 1] = True
+    term[6, 2] = True
+    term[2, 3] = trunc[2, 3] = True
+    trunc[8, 3] = True
+    return r, v, nv, term, trunc
+
+
+def as_t(*arrays):
+    return [torch.as_tensor(a) for a in arrays]
+
+
+@pytest.mark.parametrize("gamma", [0.0, 0.5, 0.99, 1.0])
+def test_discounted_returns_matches_explicit_sum(gamma):
+    r, v, nv, term, trunc = rollout()
+    got = common.discounted_returns(*as_t(r, nv, term, trunc), gamma)
+    np.testing.assert_allclose(got.numpy(), brute_returns(r, nv, term, trunc, gamma), rtol=1e-10, atol=1e-10)
+
+
+@pytest.mark.parametrize("gamma,lam", [(0.99, 0.95), (0.98, 0.8), (0.9, 0.0), (0.9, 1.0), (1.0, 1.0)])
+def test_gae_matches_explicit_sum(gamma, lam):
+    r, v, nv, term, trunc = rollout()
+    got = common.gae(*as_t(r, v, nv, term, trunc), gamma, lam)
+    np.testing.assert_allclose(got.numpy(), brute_gae(r, v, nv, term, trunc, gamma, lam), rtol=1e-10, atol=1e-10)
+
+
+def test_truncation_bootstraps_and_termination_does_not():
+    """The rule itself, on a 1-step rollout: only the flags differ."""
+    r, v, nv = torch.tensor([[1.0]]), torch.tensor([[0.0]]), torch.tensor([[10.0]])
+    yes, no = torch.tensor([[True]]), torch.tensor([[False]])
+    assert common.discounted_returns(r, nv, no, yes, 0.9).item() == pytest.approx(1 + 0.9 * 10)  # truncated
+    assert common.discounted_returns(r, nv, yes, no, 0.9).item() == pytest.approx(1.0)  # terminated
+    assert common.discounted_returns(r, nv, yes, yes, 0.9).item() == pytest.approx(1.0)  # both: terminated wins
+    assert common.gae(r, v, nv, no, yes, 0.9, 0.95).item() == pytest.approx(1 + 0.9 * 10)
+    assert common.gae(r, v, nv, yes, no, 0.9, 0.95).item() == pytest.approx(1.0)
+
+
+def test_gae_with_lambda_one_is_return_minus_value():
+    r, v, nv, term, trunc = rollout(seed=3)
+    # The sum of TD errors telescopes only when V(s_{t+1}) is the next row's V inside an episode.
+    inside = ~(term | trunc)[:-1]
+    nv[:-1][inside] = v[1:][inside]
+    adv = common.gae(*as_t(r, v, nv, term, trunc), 0.97, 1.0)
+    ret = common.discounted_returns(*as_t(r, nv, term, trunc), 0.97)
+    np.testing.assert_allclose(adv.numpy(), (ret - torch.as_tensor(v)).numpy(), atol=1e-10)
+
+
+def test_truncation_in_a_real_vector_env_rollout():
+    """A CartPole vector env with a 5-step time limit: the truncation lands mid-rollout,
+    the NEXT_STEP reset step follows it, and the final obs is the next buffer row."""
+    import gymnasium as gym
+
+    envs = gym.make_vec("CartPole-v1", num_envs=2, max_episode_steps=5)
+    obs, _ = envs.reset(seed=0)
+    rows, rewards, terms, truncs = [obs], [], [], []
+    for _ in range(8):
+        obs, rew, term, trunc, _ = envs.step(np.zeros(2, dtype=np.int64) + np.array([0, 1]))
+        rows.append(obs), rewards.append(rew), terms.append(term), truncs.append(trunc)
+    envs.close()
+    trunc, term = np.array(truncs), np.array(terms)
+    assert trunc[4].all() and not term[:5].any()  # 5 steps, then the time limit
+    # The row after the truncated step is the final obs of the old episode (not a fresh start)...
+    assert np.abs(rows[5]).max() > 0.05
+    # ...and the row after that is a new episode (reset obs lie in [-0.05, 0.05]).
+    assert np.abs(rows[6]).max() <= 0.05
+    r = np.array(rewards, dtype=np.float64)
+    assert r[5].sum() == 0  # the reset step pays nothing
+    v = np.linspace(1, 2, 9)[:, None].repeat(2, 1)  # any value function will do
+    values, next_values = v[:-1], v[1:]  # V(s_{t+1}) = value of the next stored row
+    got = common.gae(*as_t(r, values, next_values, term, trunc), 0.99, 0.95)
+    np.testing.assert_allclose(got.numpy(), brute_gae(r, values, next_values, term, trunc, 0.99, 0.95), atol=1e-10)
+    # The truncated step's advantage uses V(final obs) = next_values[4] = v[5], not 0.
+    assert got[4, 0].item() == pytest.approx(1 + 0.99 * v[5, 0] - v[4, 0])
+
+
+# --- evaluation and GIFs -----------------------------------------------------
+
+
+def test_evaluate_is_deterministic_and_counts_rewards():
+    left = common.evaluate("CartPole-v1", lambda obs: 0, episodes=3, seed=7)
+    assert left == common.evaluate("CartPole-v1", lambda obs: 0, episodes=3, seed=7)
+    assert all(5 <= r <= 15 for r in left)  # always pushing left fails fast
+    # A simple controller (push toward the pole's lean) does far better.
+    lean = common.evaluate("CartPole-v1", lambda obs: int(obs[2] + obs[3] > 0), episodes=3, seed=7)
+    assert min(lean) > 3 * max(left)
+
+
+def test_record_gif_writes_frames_showing_the_cart(tmp_path):
+    path = tmp_path / "x.gif"
+    ret = common.record_gif("CartPole-v1", lambda obs: 0, path, seed=0, every=2, scale=2)
+    frames = iio.imread(path)  # (frames, H, W, 3)
+    # One frame per 2 steps, plus the first and the last; the GIF writer may merge identical neighbours.
+    assert frames.ndim == 4 and 3 <= frames.shape[0] <= 1 + int(ret) // 2 + 1
+    assert frames.shape[1:3] == (200, 300)
+    first = frames[0]
+    assert (first < 60).all(axis=-1).sum() > 200  # the black cart is drawn
+    assert (first > 240).all(axis=-1).mean() > 0.5  # on a white background
+
+
+# --- config -> CLI -----------------------------------------------------------
+
+
+@dataclasses.dataclass
+class Demo:
+    num_envs: int = 4
+    """parallel envs"""
+    lr: float = 1e-3
+    """learning
+    rate"""
+    fast: bool = True
+    """go fast"""
+    target_kl: float | None = None
+    """early stop; none = never"""
+    name: str = "x"
+
+    def __post_init__(self):
+        common.check(self.num_envs > 0, f"--num-envs must be positive, got {self.num_envs}")
+
+
+def test_field_docs_reads_the_docstrings():
+    assert common.field_docs(Demo) == {"num_envs": "parallel envs", "lr": "learning rate", "fast": "go fast",
+                                       "target_kl": "early stop; none = never"}
+
+
+def test_parse_config_flags_and_defaults():
+    assert common.parse_config(Demo, []) == Demo()
+    cfg = common.parse_config(Demo, ["--num-envs", "8", "--lr", "3e-4", "--no-fast", "--target-kl", "0.02", "--name", "y"])
+    assert cfg == Demo(num_envs=8, lr=3e-4, fast=False, target_kl=0.02, name="y")
+    assert common.parse_config(Demo, ["--target-kl", "none"]).target_kl is None
+
+
+@pytest.mark.parametrize("argv,needle", [(["--num-envs", "0"], "--num-envs must be positive"),
+                                         (["--num-envs", "two"], "invalid int value"),
+                                         (["--bogus"], "unrecognized arguments")])
+def test_parse_config_rejects_bad_values_with_exit_2(argv, needle, capsys):
+    with pytest.raises(SystemExit) as e:
+        common.parse_config(Demo, argv)
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert needle in err and len(err.strip().splitlines()) == 1
+
+
+def test_help_shows_docstrings(capsys):
+    with pytest.raises(SystemExit):
+        common.parse_config(Demo, ["--help"])
+    out = capsys.readouterr().out
+    assert "--num-envs" in out and "parallel envs" in out and "learning rate" in out
+
+
+# --- run folders, CSV, checkpoints, errors -----------------------------------
+
+
+def test_make_run_dir_names_and_never_reuses(tmp_path):
+    a = common.make_run_dir(tmp_path, "ppo_cartpole.py", "CartPole-v1", 3)
+    b = common.make_run_dir(tmp_path, "ppo_cartpole.py", "CartPole-v1", 3)
+    assert a != b and a.is_dir() and b.is_dir()
+    assert a.name.startswith("ppo_cartpole__CartPole-v1__seed3__")
+
+
+def test_make_run_dir_unwritable_is_a_user_error(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    with pytest.raises(common.UserError, match="cannot create run folder"):
+        common.make_run_dir(blocker / "runs", "x.py", "CartPole-v1", 0)
+
+
+def test_append_csv(tmp_path):
+    path = tmp_path / "p.csv"
+    common.append_csv(path, dict(step=1, loss=0.5))
+    common.append_csv(path, dict(step=2, loss=0.25))
+    assert path.read_text().splitlines() == ["step,loss", "1,0.5", "2,0.25"]
+
+
+def test_checkpoint_round_trip_and_bad_files(tmp_path):
+    path = tmp_path / "m.pt"
+    common.save_checkpoint(dict(w=torch.arange(3.0), config=dict(a=1)), path)
+    ckpt = common.load_checkpoint(path, required=("w", "config"))
+    assert torch.equal(ckpt["w"], torch.arange(3.0)) and not (tmp_path / "m.pt.tmp").exists()
+    with pytest.raises(common.UserError, match="missing policy"):
+        common.load_checkpoint(path, required=("policy",))
+    with pytest.raises(common.UserError, match="no checkpoint"):
+        common.load_checkpoint(tmp_path / "nope.pt")
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"\x00garbage" * 10)
+    with pytest.raises(common.UserError, match="cannot read checkpoint"):
+        common.load_checkpoint(bad)
+    half = tmp_path / "half.pt"
+    half.write_bytes(path.read_bytes()[:100])
+    with pytest.raises(common.UserError, match="cannot read checkpoint"):
+        common.load_checkpoint(half)
+
+
+def test_make_env_errors_are_user_errors():
+    with pytest.raises(common.UserError, match="unknown environment"):
+        common.make_env("NoSuchEnv-v0")
+    with pytest.raises(common.UserError, match="unknown environment"):
+        common.make_vec_env("NoSuchEnv-v0", 2, 0)
+    import gymnasium as gym
+
+    with pytest.raises(common.UserError, match="Discrete"):
+        common.require_discrete("Pendulum-v1", gym.make("Pendulum-v1").action_space)
+
+
+def test_exit_on_user_error_prints_one_line(tmp_path):
+    code = textwrap.dedent("""
+        import common
+        with common.exit_on_user_error():
+            raise common.UserError("something the user can fix")
+    """)
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
+                       env={"PYTHONPATH": str(__import__("pathlib").Path(common.__file__).parent), "PATH": ""})
+    assert p.returncode == 2
+    assert p.stderr == "error: something the user can fix\n"
+
+
+@pytest.mark.parametrize("preset,expected", [({}, ("dummy", "egl")),
+                                             ({"MUJOCO_GL": "osmesa"}, ("dummy", "osmesa"))])
+def test_headless_defaults_without_a_display_keep_user_choices(preset, expected):
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER", "MUJOCO_GL")}
+    env.update(preset, PYTHONPATH=os.path.dirname(common.__file__))
+    code = "import os, common; print(os.environ['SDL_VIDEODRIVER'], os.environ['MUJOCO_GL'])"
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert p.returncode == 0, p.stderr
+    assert tuple(p.stdout.split()) == expected
