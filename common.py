@@ -38,6 +38,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import gymnasium as gym  # noqa: E402  (after the environment variables above)
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
+from torch.optim.adam import adam as torch_adam  # noqa: E402  (the function behind torch.optim.Adam)
 
 
 # =============================================================================
@@ -119,6 +120,52 @@ def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
         last = delta + gamma * lam * not_done[t] * last
         advantages[t] = last
     return advantages
+
+
+# =============================================================================
+# Optimizer
+# =============================================================================
+
+
+class Adam:
+    """torch.optim.Adam without its one-second first use: the same function, called directly.
+
+    The first use of any torch.optim optimizer object imports torch._dynamo, the
+    compiler, which takes about 1.1 s on a 2-core CPU. Our CartPole scripts solve
+    in about 3 s in all, so that import alone would be a third of the wait. This
+    class keeps Adam's state itself and calls torch.optim.adam.adam, the function
+    behind torch.optim.Adam (fused kernel), so the arithmetic is torch's own:
+
+        m_t = beta1 * m_{t-1} + (1 - beta1) * g_t          (Kingma & Ba 2015, Algorithm 1)
+        v_t = beta2 * v_{t-1} + (1 - beta2) * g_t^2
+        theta_t = theta_{t-1} - lr * (m_t / (1 - beta1^t)) / (sqrt(v_t / (1 - beta2^t)) + eps)
+
+    It has the interface our loops use: zero_grad(), step(), param_groups[0]["lr"]
+    and state_dict(); tests/test_common.py checks it against torch.optim.Adam.
+    """
+
+    def __init__(self, params, lr, betas=(0.9, 0.999), eps=1e-8):
+        self.params = [p for p in params if p.requires_grad]
+        self.param_groups = [dict(lr=lr, betas=betas, eps=eps)]
+        self.exp_avgs = [torch.zeros_like(p) for p in self.params]  # m
+        self.exp_avg_sqs = [torch.zeros_like(p) for p in self.params]  # v
+        self.state_steps = [torch.zeros((), device=p.device) for p in self.params]  # t
+
+    def zero_grad(self):
+        for p in self.params:
+            p.grad = None
+
+    @torch.no_grad()
+    def step(self):
+        group = self.param_groups[0]
+        torch_adam(self.params, [p.grad for p in self.params], self.exp_avgs, self.exp_avg_sqs, [],
+                   self.state_steps, fused=True, amsgrad=False, beta1=group["betas"][0],
+                   beta2=group["betas"][1], lr=group["lr"], weight_decay=0.0, eps=group["eps"],
+                   maximize=False)
+
+    def state_dict(self):
+        return dict(exp_avgs=self.exp_avgs, exp_avg_sqs=self.exp_avg_sqs, state_steps=self.state_steps,
+                    lr=self.param_groups[0]["lr"])
 
 
 # =============================================================================
@@ -234,7 +281,10 @@ def solve_threshold(env_id, override=None):
     """The return that counts as solved: `override`, else the env's reward_threshold."""
     if override is not None:
         return override
-    threshold = gym.spec(env_id).reward_threshold
+    try:
+        threshold = gym.spec(env_id).reward_threshold
+    except gym.error.Error as e:
+        raise UserError(f"unknown environment {env_id!r}: {e}") from None
     if threshold is None:
         raise UserError(f"{env_id} has no reward_threshold; pass --solved-return")
     return threshold

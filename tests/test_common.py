@@ -283,3 +283,22 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert p.returncode == 0, p.stderr
     assert tuple(p.stdout.split()) == expected
+
+
+def test_adam_matches_torch_optim_adam():
+    torch.manual_seed(0)
+    net_a = torch.nn.Sequential(torch.nn.Linear(3, 8), torch.nn.Tanh(), torch.nn.Linear(8, 2))
+    net_b = __import__("copy").deepcopy(net_a)
+    ours = common.Adam(net_a.parameters(), lr=3e-3, eps=1e-5)
+    ref = torch.optim.Adam(net_b.parameters(), lr=3e-3, eps=1e-5)
+    for step in range(25):
+        x = torch.randn(16, 3)
+        for net, opt in ((net_a, ours), (net_b, ref)):
+            opt.zero_grad()
+            (net(x) ** 2).mean().backward()
+            opt.step()
+        if step == 10:  # a learning-rate change is honoured, as when annealing
+            ours.param_groups[0]["lr"] = ref.param_groups[0]["lr"] = 1e-3
+    for a, b in zip(net_a.parameters(), net_b.parameters()):
+        torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6)
+    assert not torch.equal(next(net_a.parameters()), next(copy_of_start := net_b.parameters()).detach() * 0)
