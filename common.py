@@ -244,10 +244,10 @@ def make_env(env_id, **kwargs):
     """gym.make, with a clear UserError for an unknown id or a missing extra."""
     try:
         return gym.make(env_id, **kwargs)
+    except (ImportError, gym.error.DependencyNotInstalled) as e:  # e.g. MuJoCo missing; before its base class
+        raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
     except gym.error.Error as e:  # NameNotFound, VersionNotFound, ...
         raise UserError(f"unknown environment {env_id!r}: {e}") from None
-    except (ImportError, gym.error.DependencyNotInstalled) as e:
-        raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
 
 
 def make_vec_env(env_id, num_envs, seed):
@@ -259,10 +259,10 @@ def make_vec_env(env_id, num_envs, seed):
     """
     try:
         envs = gym.make_vec(env_id, num_envs=num_envs)
-    except gym.error.Error as e:
-        raise UserError(f"unknown environment {env_id!r}: {e}") from None
     except (ImportError, gym.error.DependencyNotInstalled) as e:
         raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
+    except gym.error.Error as e:
+        raise UserError(f"unknown environment {env_id!r}: {e}") from None
     mode = envs.metadata.get("autoreset_mode", gym.vector.AutoresetMode.NEXT_STEP)
     if mode != gym.vector.AutoresetMode.NEXT_STEP:
         raise UserError(f"{env_id}: expected NEXT_STEP autoreset, got {mode}")

@@ -1,0 +1,398 @@
+"""DDPG on MuJoCo Walker2d-v5 (Lillicrap et al. 2016, "Continuous control with deep reinforcement learning").
+
+Read beside tutorial 003: ReplayBuffer, Actor and Critic (the critic takes the
+action at its second layer), target networks updated softly with rate tau,
+Gaussian exploration noise, random actions for the first start_steps steps,
+and an evaluation every 5000 steps over 10 episodes. The loop, top to bottom:
+
+    act      random for start_steps steps, then mu(s) + Gaussian noise
+    store    (s, a, r, s', terminated) in the replay buffer; a time-limit
+             truncation is NOT terminal, so its target still bootstraps
+    update   one critic and one actor step on a random minibatch, then the
+             targets move a fraction tau toward the networks
+    evaluate every eval_every steps: 10 episodes of mu(s) without noise
+
+    python ddpg_walker.py                               # 1M steps: hours on a CPU, less on a GPU
+    python ddpg_walker.py --env-id InvertedPendulum-v5 --total-timesteps 20000 --start-steps 1000
+    python ddpg_walker.py --eval runs/<run>/model.pt --watch
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+import common
+
+
+@dataclass
+class Config:
+    # --- experiment ---
+    env_id: str = "Walker2d-v5"
+    """gymnasium id of an env with Box observations and Box actions (MuJoCo: Walker2d-v5, Hopper-v5, ...)"""
+    seed: int = 0
+    """seeds python, numpy, torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
+    total_timesteps: int = 1_000_000
+    """env steps to train for (the tutorial and the TD3 paper: 1M)"""
+    start_steps: int = 25_000
+    """uniformly random actions for this many steps before the actor acts and learning starts"""
+
+    # --- DDPG ---
+    expl_noise: float = 0.1
+    """std of the Gaussian exploration noise, as a fraction of the action range's half-width"""
+    batch_size: int = 256
+    """transitions per update"""
+    gamma: float = 0.99
+    """discount factor"""
+    tau: float = 0.005
+    """target networks move this fraction toward the networks after every update (0.001 .. 0.01)"""
+    actor_lr: float = 3e-4
+    """Adam step size of the actor (tutorial: 1e-4; TD3's DDPG: 3e-4)"""
+    critic_lr: float = 3e-4
+    """Adam step size of the critic (tutorial: 1e-3 with weight decay; TD3's DDPG: 3e-4)"""
+    hidden: int = 256
+    """units in each of the two hidden layers (tutorial: 400 and 300; TD3 and CleanRL: 256 and 256)"""
+    buffer_size: int = 1_000_000
+    """replay buffer capacity; the oldest transitions are overwritten"""
+
+    # --- output ---
+    run_dir: str = "runs"
+    """parent folder of the run folder <script>__<env>__seed<k>__<time>/"""
+    eval_every: int = 5000
+    """evaluate (and save the model) every this many env steps"""
+    eval_episodes: int = 10
+    """episodes per evaluation, without exploration noise"""
+    eval_seed: int = 10_000
+    """seed of the evaluation env, kept apart from the training seed"""
+    print_every: int = 1000
+    """print a progress line every this many env steps"""
+    gifs: bool = True
+    """write before.gif (untrained actor) and after.gif (trained actor) to the run folder"""
+    watch: bool = False
+    """after training (or with --eval), play the actor in a window"""
+    eval: str | None = None
+    """path of a saved model.pt: skip training, play eval_episodes episodes and print their returns"""
+    resume: str | None = None
+    """path of a saved model.pt: continue that run's training from its last saved step"""
+    cuda: bool = True
+    """train on the GPU when there is one"""
+
+    def __post_init__(self):
+        for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every", "eval_episodes",
+                     "print_every", "actor_lr", "critic_lr"):
+            common.check(getattr(self, name) > 0, f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
+        common.check(self.start_steps >= 0, f"--start-steps must be >= 0, got {self.start_steps}")
+        common.check(self.expl_noise >= 0, f"--expl-noise must be >= 0, got {self.expl_noise}")
+        common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
+        common.check(0 < self.tau <= 1, f"--tau must be in (0, 1], got {self.tau}")
+
+
+# =============================================================================
+# Networks
+# =============================================================================
+
+
+class Actor(nn.Module):
+    """mu(s): observation -> action, squashed by tanh into the action box."""
+
+    def __init__(self, obs_dim, act_dim, hidden, low, high):
+        super().__init__()
+        self.l1 = nn.Linear(obs_dim, hidden)
+        self.l2 = nn.Linear(hidden, hidden)
+        self.l3 = nn.Linear(hidden, act_dim)
+        # tanh gives [-1, 1]; scale and shift it onto [low, high] (Walker2d: [-1, 1] already).
+        self.register_buffer("scale", torch.as_tensor((high - low) / 2, dtype=torch.float32))
+        self.register_buffer("bias", torch.as_tensor((high + low) / 2, dtype=torch.float32))
+
+    def forward(self, obs):
+        a = F.relu(self.l1(obs))
+        a = F.relu(self.l2(a))
+        return self.bias + self.scale * torch.tanh(self.l3(a))
+
+
+class Critic(nn.Module):
+    """Q(s, a). As in the DDPG paper and tutorial 003, the action joins at the second layer."""
+
+    def __init__(self, obs_dim, act_dim, hidden):
+        super().__init__()
+        self.l1 = nn.Linear(obs_dim, hidden)
+        self.l2 = nn.Linear(hidden + act_dim, hidden)
+        self.l3 = nn.Linear(hidden, 1)
+
+    def forward(self, obs, action):
+        q = F.relu(self.l1(obs))
+        q = F.relu(self.l2(torch.cat([q, action], dim=-1)))
+        return self.l3(q).squeeze(-1)  # (B,): squeeze so Q never broadcasts against (B,) targets
+
+
+# =============================================================================
+# Replay buffer and update
+# =============================================================================
+
+
+class ReplayBuffer:
+    """A ring of the last `size` transitions, kept as one tensor on the training device.
+
+    Each row is [obs, action, reward, next_obs, not_done]. Storing one row per
+    step and sampling by index means a minibatch is a single gather on the
+    device: no numpy -> torch conversion of the batch, no copy to the GPU.
+    """
+
+    def __init__(self, obs_dim, act_dim, size, device):
+        self.obs_dim, self.act_dim, self.size = obs_dim, act_dim, size
+        self.rows = torch.zeros(size, 2 * obs_dim + act_dim + 2, device=device)
+        self.ptr, self.count = 0, 0
+
+    def add(self, obs, action, reward, next_obs, terminated):
+        # not_done = 0 only when the episode really ended. A time-limit truncation keeps
+        # not_done = 1: the state was not terminal, so its target bootstraps from Q(s', mu(s')).
+        row = np.concatenate([obs, action, [reward], next_obs, [0.0 if terminated else 1.0]])
+        self.rows[self.ptr] = torch.as_tensor(row, dtype=torch.float32)
+        self.ptr = (self.ptr + 1) % self.size  # wrap around: overwrite the oldest
+        self.count = min(self.count + 1, self.size)
+
+    def sample(self, batch_size):
+        """A uniformly random minibatch: obs (B, obs_dim), action (B, act_dim), reward, next_obs, not_done (B,)."""
+        idx = torch.randint(0, self.count, (batch_size,), device=self.rows.device)
+        batch = self.rows[idx]
+        o, a = self.obs_dim, self.act_dim
+        return (batch[:, :o], batch[:, o:o + a], batch[:, o + a],
+                batch[:, o + a + 1:2 * o + a + 1], batch[:, -1])
+
+
+def soft_update(target, source, tau):
+    """theta' <- tau * theta + (1 - tau) * theta'  (Lillicrap et al. 2016, Algorithm 1), in one fused call."""
+    with torch.no_grad():
+        torch._foreach_lerp_(list(target.parameters()), list(source.parameters()), tau)
+
+
+def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+    """One critic step and one actor step on a minibatch, then the soft target update."""
+    obs, action, reward, next_obs, not_done = batch
+    # Critic target y = r + gamma * Q'(s', mu'(s')), with no future at a termination
+    # (Lillicrap et al. 2016, Algorithm 1). Targets are constants: no gradient flows into them.
+    with torch.no_grad():
+        y = reward + cfg.gamma * not_done * critic_target(next_obs, actor_target(next_obs))
+    # L = mean (y - Q(s, a))^2  (Lillicrap et al. 2016, Algorithm 1)
+    critic_loss = F.mse_loss(critic(obs, action), y)
+    critic_opt.zero_grad()
+    critic_loss.backward()
+    critic_opt.step()
+
+    # Deterministic policy gradient: grad J = mean grad_a Q(s, a)|a=mu(s) * grad mu(s)
+    # (Lillicrap et al. 2016, Algorithm 1): ascend Q, so minimize -Q. `inputs=` keeps
+    # backward from computing critic gradients that would be thrown away.
+    actor_loss = -critic(obs, actor(obs)).mean()
+    actor_opt.zero_grad()
+    actor_loss.backward(inputs=list(actor.parameters()))
+    actor_opt.step()
+
+    soft_update(critic_target, critic, cfg.tau)
+    soft_update(actor_target, actor, cfg.tau)
+    return critic_loss.detach(), actor_loss.detach()
+
+
+# =============================================================================
+# Training
+# =============================================================================
+
+
+def deterministic(actor, device):
+    """obs -> mu(obs) as a numpy action, without noise; for evaluation and GIFs."""
+    def act(obs):
+        with torch.no_grad():
+            return actor(torch.as_tensor(obs, dtype=torch.float32, device=device)).cpu().numpy()
+    return act
+
+
+def make_continuous_env(env_id, **kwargs):
+    """The env, or a UserError if its actions are not a Box."""
+    import gymnasium as gym
+
+    env = common.make_env(env_id, **kwargs)
+    if not isinstance(env.action_space, gym.spaces.Box):
+        env.close()
+        raise common.UserError(f"{env_id} has a {type(env.action_space).__name__} action space; "
+                               "DDPG needs continuous (Box) actions")
+    return env
+
+
+def build(obs_dim, act_dim, low, high, cfg, device):
+    """Actor, critic, their targets and optimizers."""
+    actor = Actor(obs_dim, act_dim, cfg.hidden, low, high).to(device)
+    critic = Critic(obs_dim, act_dim, cfg.hidden).to(device)
+    actor_target, critic_target = copy.deepcopy(actor), copy.deepcopy(critic)  # start equal, then lag behind
+    fused = dict(fused=True) if device.type in ("cpu", "cuda") else {}  # one kernel per step, not one per tensor
+    actor_opt = torch.optim.Adam(actor.parameters(), lr=cfg.actor_lr, **fused)
+    critic_opt = torch.optim.Adam(critic.parameters(), lr=cfg.critic_lr, **fused)
+    return actor, critic, actor_target, critic_target, actor_opt, critic_opt
+
+
+def train(cfg: Config):
+    """Train DDPG with `cfg`. Returns a dict: run_dir, global_step, evaluations (list of
+    (step, mean, std)), episode_returns, steps_per_second (learning phase) and interrupted."""
+    start_time = time.time()
+    # --- seeding and setup ---
+    common.seed_everything(cfg.seed)
+    device = common.pick_device(cfg.cuda)
+    env = make_continuous_env(cfg.env_id)
+    obs_dim, act_dim = int(env.observation_space.shape[0]), int(env.action_space.shape[0])
+    low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
+    env.action_space.seed(cfg.seed)
+    nets = build(obs_dim, act_dim, low, high, cfg, device)
+    actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets
+    untrained = copy.deepcopy(actor)  # before.gif is drawn from these weights after training
+    first_step = 0
+    if cfg.resume:
+        ckpt = load(cfg.resume, nets)
+        first_step = ckpt["global_step"]
+        print(f"resumed {cfg.resume} at step {first_step}; the replay buffer starts empty and is refilled "
+              f"by the loaded actor for start_steps steps", flush=True)
+    run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
+    print(f"run folder: {run_dir}  (device: {device})", flush=True)
+    buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
+    noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32, device=device)
+    low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
+    high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
+
+    def save():
+        common.save_checkpoint(dict(actor=actor.state_dict(), critic=critic.state_dict(),
+                                    actor_target=actor_target.state_dict(), critic_target=critic_target.state_dict(),
+                                    actor_opt=actor_opt.state_dict(), critic_opt=critic_opt.state_dict(),
+                                    config=asdict(cfg), obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(),
+                                    high=high.tolist(), global_step=global_step), run_dir / "model.pt")
+
+    # --- bookkeeping ---
+    episode_returns, evaluations = [], []
+    ep_return, losses = 0.0, None
+    learn_start_time, learn_start_step = None, None
+    global_step, interrupted = first_step, False
+    warmup_until = first_step + cfg.start_steps
+    obs, _ = env.reset(seed=cfg.seed)
+
+    try:
+        for global_step in range(first_step + 1, cfg.total_timesteps + 1):
+            # --- act ---
+            if global_step <= warmup_until and not cfg.resume:
+                action = env.action_space.sample()  # random warm-up fills the buffer with diverse data
+            else:
+                with torch.no_grad():
+                    a = actor(torch.as_tensor(obs, dtype=torch.float32, device=device))
+                    a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian exploration noise
+                    action = torch.clamp(a, low_t, high_t).cpu().numpy()
+            next_obs, reward, terminated, truncated, _ = env.step(action)
+            buffer.add(obs, action, reward, next_obs, terminated)  # terminated, not truncated: see ReplayBuffer.add
+            # obs = next_obs: the transition above is stored, the next action starts from here.
+            obs = next_obs
+            ep_return += float(reward)
+            if terminated or truncated:
+                episode_returns.append(ep_return)
+                ep_return = 0.0
+                obs, _ = env.reset()
+
+            # --- learn: one critic and one actor update per env step after the warm-up ---
+            if global_step > warmup_until:
+                if learn_start_time is None:
+                    learn_start_time, learn_start_step = time.time(), global_step
+                losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt,
+                                     buffer.sample(cfg.batch_size), cfg)
+
+            # --- logging ---
+            if global_step % cfg.print_every == 0:
+                elapsed = time.time() - start_time
+                if learn_start_time is not None and global_step > learn_start_step:
+                    rate = (global_step - learn_start_step) / (time.time() - learn_start_time)
+                    eta = (cfg.total_timesteps - global_step) / rate
+                    speed = f"{rate:5.0f} steps/s  eta {common.format_time(eta)}"
+                else:
+                    speed = "warm-up (random actions)"
+                recent = f"{np.mean(episode_returns[-10:]):8.1f}" if episode_returns else "     n/a"
+                loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
+                             if losses is not None else "")
+                print(f"step {global_step:>8}  {speed}  return(10) {recent}{loss_text}  "
+                      f"{common.format_time(elapsed)}", flush=True)
+            if global_step % cfg.eval_every == 0:
+                returns = common.evaluate(cfg.env_id, deterministic(actor, device), cfg.eval_episodes,
+                                          cfg.eval_seed)
+                evaluations.append((global_step, float(np.mean(returns)), float(np.std(returns))))
+                common.append_csv(run_dir / "evaluations.csv", dict(
+                    global_step=global_step, eval_mean=evaluations[-1][1], eval_std=evaluations[-1][2],
+                    episodes=len(episode_returns),
+                    train_return_mean10=float(np.mean(episode_returns[-10:])) if episode_returns else float("nan")))
+                print(f"evaluation at step {global_step}: {evaluations[-1][1]:.1f} +- {evaluations[-1][2]:.1f} "
+                      f"over {cfg.eval_episodes} episodes", flush=True)
+                save()  # atomic: a crash never leaves half a model.pt
+    except KeyboardInterrupt:
+        interrupted = True
+        print("\ninterrupted: saving the model and the logs", flush=True)
+    finally:
+        env.close()
+        save()
+
+    learned = global_step - (learn_start_step or global_step)
+    rate = learned / (time.time() - learn_start_time) if learn_start_time and learned > 0 else float("nan")
+    result = dict(run_dir=run_dir, global_step=global_step, evaluations=evaluations, episode_returns=episode_returns,
+                  steps_per_second=rate, interrupted=interrupted)
+    print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor update per step, "
+          f"evaluations included); model: {run_dir / 'model.pt'}", flush=True)
+    if interrupted:
+        return result
+    if cfg.gifs:
+        for name, net in (("before.gif", untrained), ("after.gif", actor)):
+            ret = common.record_gif(cfg.env_id, deterministic(net, device), run_dir / name, cfg.eval_seed,
+                                    max_frames=250, every=4, scale=2)
+            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+    return result
+
+
+def load(path, nets):
+    """Load a checkpoint into (actor, critic, actor_target, critic_target, actor_opt, critic_opt)."""
+    keys = ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic_opt")
+    ckpt = common.load_checkpoint(path, required=keys + ("global_step",))
+    try:
+        for key, obj in zip(keys, nets):
+            obj.load_state_dict(ckpt[key])
+    except (RuntimeError, ValueError, KeyError) as e:
+        raise common.UserError(f"{path} does not fit this run's networks: {str(e).splitlines()[0]}") from None
+    return ckpt
+
+
+def play(cfg: Config):
+    """--eval PATH: load a saved actor and play cfg.eval_episodes episodes without noise."""
+    ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low", "high", "config"))
+    actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"], np.array(ckpt["low"]),
+                  np.array(ckpt["high"]))
+    try:
+        actor.load_state_dict(ckpt["actor"])
+    except RuntimeError as e:
+        raise common.UserError(f"{cfg.eval} does not fit this script's Actor: {str(e).splitlines()[0]}") from None
+    env_id = ckpt["config"]["env_id"]
+    returns = common.evaluate(env_id, deterministic(actor, torch.device("cpu")), cfg.eval_episodes, cfg.eval_seed,
+                              render_mode="human" if cfg.watch else None)
+    print(f"{env_id}, {cfg.eval}: returns {[round(r, 1) for r in returns]}, mean {np.mean(returns):.1f}", flush=True)
+    return returns
+
+
+def main(argv=None):
+    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
+    with common.exit_on_user_error():
+        if cfg.watch:
+            common.require_display()
+        if cfg.eval:
+            play(cfg)
+            return
+        result = train(cfg)
+        if result["interrupted"]:
+            raise SystemExit(130)
+        if cfg.watch:
+            play(Config(**{**asdict(cfg), "eval": str(result["run_dir"] / "model.pt")}))
+
+
+if __name__ == "__main__":
+    main()
