@@ -1,0 +1,178 @@
+"""DDPG: its replay buffer and soft update against hand computations, a smoke run
+on Walker2d-v5, reproducibility, reloading, clear errors, and learning on a cheap task."""
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+import torch
+
+import ddpg_walker as ddpg
+from conftest import ROOT, run_script
+
+
+def test_replay_buffer_wraps_around_and_keeps_the_newest():
+    buf = ddpg.ReplayBuffer(obs_dim=3, act_dim=2, size=5, device="cpu")
+    for i in range(7):
+        buf.add(np.full(3, i), np.full(2, -i), float(i), np.full(3, i + 0.5), terminated=False)
+    assert buf.count == 5 and buf.ptr == 2
+    stored_rewards = sorted(buf.rows[:, 5].tolist())
+    assert stored_rewards == [2.0, 3.0, 4.0, 5.0, 6.0]  # 0 and 1 were overwritten
+    assert buf.rows[0, 5].item() == 5.0 and buf.rows[1, 5].item() == 6.0
+
+
+def test_replay_buffer_sample_shapes_and_fields():
+    buf = ddpg.ReplayBuffer(obs_dim=4, act_dim=2, size=100, device="cpu")
+    for i in range(10):
+        buf.add(np.arange(4) + i, np.array([0.5, -0.5]), 1.0 + i, np.arange(4) + i + 1, terminated=(i == 9))
+    obs, act, rew, next_obs, not_done = buf.sample(32)
+    assert obs.shape == (32, 4) and act.shape == (32, 2) and next_obs.shape == (32, 4)
+    assert rew.shape == (32,) and not_done.shape == (32,)
+    # Each sampled row is one stored transition, its fields in the right place.
+    i = (rew - 1).long()
+    torch.testing.assert_close(obs, torch.arange(4.0) + i[:, None].float())
+    torch.testing.assert_close(next_obs, obs + 1)
+    assert torch.equal(not_done, (i != 9).float())
+    assert (act == torch.tensor([0.5, -0.5])).all()
+    # Sampling never reads beyond what was stored.
+    assert set(i.tolist()) <= set(range(10))
+
+
+def test_truncated_is_not_terminal_in_the_buffer():
+    """A time-limit truncation keeps not_done = 1 (bootstrap); only termination zeroes it."""
+    buf = ddpg.ReplayBuffer(obs_dim=1, act_dim=1, size=4, device="cpu")
+    buf.add(np.zeros(1), np.zeros(1), 1.0, np.ones(1), terminated=True)   # fell over
+    buf.add(np.zeros(1), np.zeros(1), 2.0, np.ones(1), terminated=False)  # time limit or mid-episode
+    assert buf.rows[0, -1].item() == 0.0 and buf.rows[1, -1].item() == 1.0
+
+
+def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
+    """Run the real loop on an env with a 3-step time limit: what the buffer stores as
+    terminal must be the env's `terminated`, never its `truncated`."""
+    real_make = ddpg.common.make_env
+    flags = []  # (terminated, truncated) as the env returned them
+
+    def make_short_env(env_id, **kw):
+        env = real_make(env_id, max_episode_steps=3, **kw)
+        real_step = env.step
+
+        def step(action):
+            out = real_step(action)
+            flags.append((bool(out[2]), bool(out[3])))
+            return out
+        env.step = step
+        return env
+
+    monkeypatch.setattr(ddpg.common, "make_env", make_short_env)
+    stored = []
+    real_add = ddpg.ReplayBuffer.add
+    monkeypatch.setattr(ddpg.ReplayBuffer, "add", lambda self, o, a, r, no, terminated: (
+        stored.append(terminated), real_add(self, o, a, r, no, terminated))[1])
+    ddpg.train(ddpg.Config(env_id="InvertedPendulum-v5", total_timesteps=40, start_steps=40, eval_every=10**6,
+                           print_every=10**6, gifs=False, run_dir=str(tmp_path), cuda=False))
+    assert len(stored) == 40
+    assert [bool(x) for x in stored] == [term for term, _ in flags]
+    assert any(trunc and not term for term, trunc in flags)  # time limits happened and were stored as not terminal
+
+
+def test_soft_update_matches_hand_computation():
+    source, target = torch.nn.Linear(3, 2), torch.nn.Linear(3, 2)
+    w_s, w_t = source.weight.detach().clone(), target.weight.detach().clone()
+    b_s, b_t = source.bias.detach().clone(), target.bias.detach().clone()
+    ddpg.soft_update(target, source, tau=0.1)
+    torch.testing.assert_close(target.weight, 0.1 * w_s + 0.9 * w_t)
+    torch.testing.assert_close(target.bias, 0.1 * b_s + 0.9 * b_t)
+    torch.testing.assert_close(source.weight, w_s)  # the source is untouched
+
+
+def test_critic_takes_the_action_at_its_second_layer():
+    critic = ddpg.Critic(obs_dim=17, act_dim=6, hidden=32)
+    assert critic.l1.in_features == 17 and critic.l2.in_features == 32 + 6
+    assert critic(torch.zeros(5, 17), torch.zeros(5, 6)).shape == (5,)
+
+
+def small(tmp_path, **kw):
+    return ddpg.Config(**{**dict(total_timesteps=600, start_steps=300, eval_every=300, eval_episodes=2,
+                                 print_every=300, batch_size=64, hidden=64, run_dir=str(tmp_path), cuda=False), **kw})
+
+
+def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
+    result = ddpg.train(small(tmp_path))
+    run = result["run_dir"]
+    rows = list(csv.DictReader(open(run / "evaluations.csv")))
+    assert [int(r["global_step"]) for r in rows] == [300, 600]
+    assert {"eval_mean", "eval_std"} <= set(rows[0])
+    for gif in ("before.gif", "after.gif"):
+        frames = iio.imread(run / gif)
+        assert frames.ndim == 4 and frames.shape[0] >= 2
+        assert frames[0].std() > 10  # a rendered scene, not a blank image
+    ckpt = torch.load(run / "model.pt", weights_only=True)
+    assert ckpt["global_step"] == 600 and ckpt["config"]["env_id"] == "Walker2d-v5"
+    # --eval replays the saved actor: same returns as the last evaluation.
+    returns = ddpg.play(ddpg.Config(eval=str(run / "model.pt"), eval_episodes=2))
+    assert np.mean(returns) == pytest.approx(result["evaluations"][-1][1])
+
+
+def test_same_seed_same_evaluations(tmp_path):
+    a, b = [ddpg.train(small(tmp_path / str(i), gifs=False, seed=5)) for i in range(2)]
+    assert (a["run_dir"] / "evaluations.csv").read_text() == (b["run_dir"] / "evaluations.csv").read_text()
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--env-id", "CartPole-v1"], "needs continuous (Box) actions"),
+    (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
+    (["--tau", "0"], "--tau must be in (0, 1]"),
+    (["--eval", "{tmp}/missing.pt"], "no checkpoint"),
+    (["--resume", "{file}"], "cannot read checkpoint"),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not a checkpoint")
+    args = [a.format(tmp=tmp_path, file=bad) for a in args]
+    p = run_script("ddpg_walker.py", *args, "--run-dir", tmp_path, "--total-timesteps", 50, timeout=120)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+
+
+def test_missing_mujoco_is_one_clear_line(tmp_path):
+    code = ("import sys; sys.modules['mujoco'] = None\n"  # as if MuJoCo were not installed
+            "import ddpg_walker; ddpg_walker.main(['--run-dir', sys.argv[1]])")
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    p = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, env=env,
+                       timeout=120)
+    assert p.returncode == 2, p.stderr
+    assert "needs a package that is not installed" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_ctrl_c_saves_model_and_log(tmp_path):
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, str(ROOT / "ddpg_walker.py"), "--env-id", "InvertedPendulum-v5",
+                             "--run-dir", str(tmp_path), "--start-steps", "100", "--eval-every", "200",
+                             "--eval-episodes", "1", "--print-every", "50", "--no-cuda"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
+    for line in proc.stdout:
+        if line.startswith("evaluation"):
+            break
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "interrupted" in out
+    (run,) = tmp_path.iterdir()
+    assert torch.load(run / "model.pt", weights_only=True)["global_step"] >= 200
+    assert len(list(csv.DictReader(open(run / "evaluations.csv")))) >= 1
+
+
+def test_learns_inverted_pendulum_with_a_fixed_seed(tmp_path):
+    """The cheap MuJoCo task: from falling within ~100 steps to balancing all 1000.
+    Seeds 0, 1 and 2 all reached 1000 by 15k steps with these settings (~30 s each)."""
+    cfg = ddpg.Config(env_id="InvertedPendulum-v5", total_timesteps=20_000, start_steps=1000, eval_every=2500,
+                      hidden=128, batch_size=128, actor_lr=1e-3, critic_lr=1e-3, tau=0.01, seed=0,
+                      print_every=10**6, gifs=False, run_dir=str(tmp_path), cuda=False)
+    evaluations = ddpg.train(cfg)["evaluations"]
+    assert evaluations[0][1] < 200  # untrained-ish: the pole falls
+    assert evaluations[-1][1] >= 900, evaluations  # near the maximum of 1000
