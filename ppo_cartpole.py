@@ -47,10 +47,10 @@ class Config:
     """the return that counts as solved; none = the env's reward_threshold (475 for CartPole-v1)"""
 
     # --- collection ---
-    num_envs: int = 8
-    """parallel envs in the vector env; more envs = more diverse batches, fewer updates per step"""
+    num_envs: int = 4
+    """parallel envs in the vector env; more envs = more diverse batches, fewer updates per env step"""
     num_steps: int = 32
-    """steps per env per rollout; the batch is num_envs * num_steps transitions (here 256)"""
+    """steps per env per rollout; the batch is num_envs * num_steps transitions (here 128)"""
 
     # --- PPO ---
     learning_rate: float = 2.5e-3
@@ -63,7 +63,7 @@ class Config:
     """GAE lambda: 0 = one-step TD advantages (low variance), 1 = Monte Carlo (no bias); usually 0.8 .. 0.97"""
     update_epochs: int = 10
     """passes over each batch (tutorial 000 uses 10)"""
-    num_minibatches: int = 4
+    num_minibatches: int = 2
     """minibatches per epoch; minibatch size = batch / num_minibatches"""
     norm_adv: bool = True
     """normalize advantages to mean 0, std 1 within each minibatch"""

@@ -50,6 +50,7 @@ def test_smoke_run_writes_gifs_model_and_csv(script, tmp_path):
     assert {"global_step", "episodes", "return_mean20"} <= set(log[0])
 
 
+@pytest.mark.slow
 def test_learns_cartpole_with_a_fixed_seed(script, tmp_path):
     """The defaults solve CartPole well inside a 60k-step budget (median ~20k over seeds 0-9)."""
     result = script.train(small(script, tmp_path, seed=1, total_timesteps=60_000, gifs=False, eval_episodes=5))
@@ -95,8 +96,9 @@ def test_bad_input_is_one_line_and_exit_2(script, tmp_path, args, needle):
     blocker = tmp_path / "not_a_folder.pt"
     blocker.write_bytes(b"this is not a checkpoint")
     args = [a.format(file=blocker, tmp=tmp_path) for a in args]
-    p = run_script(f"{script.__name__}.py", *args, "--run-dir" if "--run-dir" not in args else "", *(
-        [tmp_path] if "--run-dir" not in args else []), timeout=120)
+    if "--run-dir" not in args:
+        args += ["--run-dir", str(tmp_path)]
+    p = run_script(f"{script.__name__}.py", *args, timeout=120)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert "Traceback" not in p.stderr
     assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr

@@ -167,6 +167,7 @@ def test_ctrl_c_saves_model_and_log(tmp_path):
     assert len(list(csv.DictReader(open(run / "evaluations.csv")))) >= 1
 
 
+@pytest.mark.slow
 def test_learns_inverted_pendulum_with_a_fixed_seed(tmp_path):
     """The cheap MuJoCo task: from falling within ~100 steps to balancing all 1000.
     Seeds 0, 1 and 2 all reached 1000 by 15k steps with these settings (~30 s each)."""
