@@ -5,8 +5,9 @@ scripts themselves (ppo_cartpole.py, ...), deliberately duplicated, so each
 script reads top to bottom on its own. What is *not* algorithm lives here once:
 
     discounted_returns, gae       -- the two ways to turn rewards into targets
-    record_gif, evaluate          -- off-screen rendering and greedy evaluation
-    parse_config                  -- a @dataclass Config becomes --flag options
+    record_gif, before_after_gifs -- off-screen rendering of one episode to a GIF
+    evaluate                      -- play N episodes with a policy, return their returns
+    parse_config, main            -- a @dataclass Config becomes --flag options; the CLI flow
     seed_everything, make_run_dir, append_csv, save_checkpoint, load_checkpoint
     UserError, exit_on_user_error -- bad input ends in one clear line, exit 2
 """
@@ -235,6 +236,14 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
     return total
 
 
+def before_after_gifs(env_id, run_dir, untrained, trained, seed, **gif_kwargs):
+    """Write run_dir/before.gif and run_dir/after.gif: one episode of each policy (see record_gif)."""
+    for name, policy in (("before.gif", untrained), ("after.gif", trained)):
+        path = Path(run_dir) / name
+        ret = record_gif(env_id, policy, path, seed, **gif_kwargs)
+        print(f"{name}: return {ret:.0f} -> {path}", flush=True)
+
+
 # =============================================================================
 # Environments
 # =============================================================================
@@ -451,6 +460,35 @@ def format_time(seconds):
     if seconds < 3600:
         return f"{seconds // 60}m{seconds % 60:02d}s"
     return f"{seconds // 3600}h{seconds % 3600 // 60:02d}m"
+
+
+# =============================================================================
+# The command line of every script
+# =============================================================================
+
+
+def main(config_cls, train, play, argv=None, description=None):
+    """What `python <script>.py [flags]` does, the same for every script:
+
+        --eval PATH        play(cfg): replay a saved model, no training
+        (otherwise)        train(cfg), which returns a dict with run_dir and interrupted
+        --watch            then replay the trained model in a window (needs a display)
+
+    Bad input ends in one `error:` line and exit code 2; Ctrl-C during training
+    (after train has saved the model and logs) in exit code 130.
+    """
+    cfg = parse_config(config_cls, argv, description=description)
+    with exit_on_user_error():
+        if cfg.watch:
+            require_display()  # fail now, not after an hour of training
+        if cfg.eval:
+            play(cfg)
+            return
+        result = train(cfg)
+        if result["interrupted"]:
+            raise SystemExit(130)
+        if cfg.watch:
+            play(dataclasses.replace(cfg, eval=str(Path(result["run_dir"]) / "model.pt")))
 
 
 # =============================================================================

@@ -344,10 +344,8 @@ def train(cfg: Config):
     if interrupted:
         return result
     if cfg.gifs:
-        for name, net in (("before.gif", untrained), ("after.gif", actor)):
-            ret = common.record_gif(cfg.env_id, deterministic(net, device), run_dir / name, cfg.eval_seed,
-                                    max_frames=250, every=4, scale=2)
-            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+        common.before_after_gifs(cfg.env_id, run_dir, deterministic(untrained, device), deterministic(actor, device),
+                                 cfg.eval_seed, max_frames=250, every=4, scale=2)  # 1000 steps -> 250 frames
     return result
 
 
@@ -380,18 +378,8 @@ def play(cfg: Config):
 
 
 def main(argv=None):
-    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
-    with common.exit_on_user_error():
-        if cfg.watch:
-            common.require_display()
-        if cfg.eval:
-            play(cfg)
-            return
-        result = train(cfg)
-        if result["interrupted"]:
-            raise SystemExit(130)
-        if cfg.watch:
-            play(Config(**{**asdict(cfg), "eval": str(result["run_dir"] / "model.pt")}))
+    """Parse the flags into a Config, then --eval, or train (and --watch); see common.main."""
+    common.main(Config, train, play, argv, description=__doc__.split("\n")[0])
 
 
 if __name__ == "__main__":

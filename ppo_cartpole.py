@@ -387,9 +387,8 @@ def train(cfg: Config):
     print(f"greedy evaluation over {cfg.eval_episodes} episodes: mean {np.mean(result['eval_returns']):.1f}, "
           f"min {min(result['eval_returns']):.0f}", flush=True)
     if cfg.gifs:
-        for name, net in (("before.gif", untrained), ("after.gif", policy)):
-            ret = common.record_gif(cfg.env_id, greedy(net, device), run_dir / name, cfg.eval_seed, every=2, scale=2)
-            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+        common.before_after_gifs(cfg.env_id, run_dir, greedy(untrained, device), greedy(policy, device), cfg.eval_seed,
+                                 every=2, scale=2)  # every 2nd frame at half size: small files
     return result
 
 
@@ -409,19 +408,8 @@ def play(cfg: Config):
 
 
 def main(argv=None):
-    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
-    with common.exit_on_user_error():
-        if cfg.watch:
-            common.require_display()
-        if cfg.eval:
-            play(cfg)
-            return
-        result = train(cfg)
-        if result["interrupted"]:
-            raise SystemExit(130)
-        if cfg.watch:
-            ckpt = str(result["run_dir"] / "model.pt")
-            play(Config(**{**asdict(cfg), "eval": ckpt}))
+    """Parse the flags into a Config, then --eval, or train (and --watch); see common.main."""
+    common.main(Config, train, play, argv, description=__doc__.split("\n")[0])
 
 
 if __name__ == "__main__":

@@ -118,7 +118,7 @@ def main():
                 print(f"seed {seed}  {name:<22} {shown}", flush=True)
 
     summary = {name: summarize(runs) for name, runs in results.items()}
-    print(f"\n| runner | solved | median steps | worst steps | median s | worst s |\n|---|---|---|---|---|---|")
+    print("\n| runner | solved | median steps | worst steps | median s | worst s |\n|---|---|---|---|---|---|")
     for name, s in summary.items():
         if s["solved"]:
             print(f"| {name} | {s['solved']}/{s['seeds']} | {s['median_steps']:,.0f} | {s['worst_steps']:,} "

@@ -12,3 +12,22 @@ def run_script(script, *args, timeout=300, cwd=None):
     env.pop("DISPLAY", None)  # the tests are about a headless machine, like CI
     return subprocess.run([sys.executable, str(ROOT / script), *map(str, args)], capture_output=True,
                           text=True, timeout=timeout, cwd=cwd or ROOT, env=env)
+
+
+def interrupt(script, *args, after):
+    """Start `python <script> args...`, send Ctrl-C (SIGINT) once a stdout line starts
+    with `after`; return (returncode, stdout, stderr)."""
+    import signal
+
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    env.pop("DISPLAY", None)
+    proc = subprocess.Popen([sys.executable, str(ROOT / script), *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
+    seen = []
+    for line in proc.stdout:  # wait until training is under way
+        seen.append(line)
+        if line.startswith(after):
+            break
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    return proc.returncode, "".join(seen) + out, err

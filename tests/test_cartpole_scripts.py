@@ -3,17 +3,12 @@ reloads what it learned, and bad input ends in one clear line with exit code 2."
 
 import csv
 import importlib
-import os
-import signal
-import subprocess
-import sys
-
 import imageio.v3 as iio
 import numpy as np
 import pytest
 import torch
 
-from conftest import ROOT, run_script
+from conftest import ROOT, interrupt, run_script
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
            if (ROOT / f"{name}.py").exists()]
@@ -105,17 +100,9 @@ def test_bad_input_is_one_line_and_exit_2(script, tmp_path, args, needle):
 
 
 def test_ctrl_c_saves_model_and_log(script, tmp_path):
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    env.pop("DISPLAY", None)
-    proc = subprocess.Popen([sys.executable, str(ROOT / f"{script.__name__}.py"), "--run-dir", str(tmp_path),
-                             "--no-stop-when-solved", "--total-timesteps", "10000000", "--print-every", "1"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
-    for line in proc.stdout:  # wait until training is under way
-        if line.startswith("step"):
-            break
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
+    code, out, err = interrupt(f"{script.__name__}.py", "--run-dir", tmp_path, "--no-stop-when-solved",
+                               "--total-timesteps", 10_000_000, "--print-every", 1, after="step")
+    assert code == 130, err
     assert "Traceback" not in err and "interrupted" in out
     (run,) = tmp_path.iterdir()
     ckpt = torch.load(run / "model.pt", weights_only=True)

@@ -3,7 +3,6 @@ on Walker2d-v5, reproducibility, reloading, clear errors, and learning on a chea
 
 import csv
 import os
-import signal
 import subprocess
 import sys
 
@@ -13,7 +12,7 @@ import pytest
 import torch
 
 import ddpg_walker as ddpg
-from conftest import ROOT, run_script
+from conftest import ROOT, interrupt, run_script
 
 
 def test_replay_buffer_wraps_around_and_keeps_the_newest():
@@ -150,17 +149,10 @@ def test_missing_mujoco_is_one_clear_line(tmp_path):
 
 
 def test_ctrl_c_saves_model_and_log(tmp_path):
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, str(ROOT / "ddpg_walker.py"), "--env-id", "InvertedPendulum-v5",
-                             "--run-dir", str(tmp_path), "--start-steps", "100", "--eval-every", "200",
-                             "--eval-episodes", "1", "--print-every", "50", "--no-cuda"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
-    for line in proc.stdout:
-        if line.startswith("evaluation"):
-            break
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
+    code, out, err = interrupt("ddpg_walker.py", "--env-id", "InvertedPendulum-v5", "--run-dir", tmp_path,
+                               "--start-steps", 100, "--eval-every", 200, "--eval-episodes", 1, "--print-every", 50,
+                               "--no-cuda", after="evaluation")
+    assert code == 130, err
     assert "Traceback" not in err and "interrupted" in out
     (run,) = tmp_path.iterdir()
     assert torch.load(run / "model.pt", weights_only=True)["global_step"] >= 200
