@@ -268,14 +268,14 @@ def train(cfg: Config):
 
             # --- collect: T steps of N envs with the current policy ---
             for t in range(T):
+                # obs = next_obs: the trap of every hand-written loop. The action (and its
+                # value) belong to obs; next_obs is only where they led.
                 obs = next_obs
                 with torch.no_grad():
                     action = Categorical(logits=model(obs)[0]).sample()
                 next_obs, reward, terminated, truncated, _ = envs.step(action.cpu().numpy())
                 global_step += N
                 buffer.store(t, obs, action, reward_scale * reward, terminated, truncated, valid=~autoreset)
-                # obs = next_obs: the trap of every hand-written loop. The value
-                # and the action belong to obs; next_obs is where they led.
                 next_obs = torch.as_tensor(next_obs, dtype=torch.float32, device=device)
 
                 ep_return += reward
@@ -292,7 +292,9 @@ def train(cfg: Config):
                           f"at step {global_step} (episode {len(episode_returns)}) after {time.time() - start_time:.1f}s",
                           flush=True)
                     if cfg.stop_when_solved:
-                        raise StopIteration  # leave both loops; the partial rollout is not used
+                        break
+            if solved_step is not None and cfg.stop_when_solved:
+                break  # done: the partial rollout is not used for an update
             # --- update: one gradient step on the whole rollout ---
             loss, stats = a2c_loss(model, buffer, next_obs, cfg)
             optimizer.zero_grad()
@@ -315,8 +317,6 @@ def train(cfg: Config):
                       f"loss_v {stats['loss_v']:6.3f}  entropy {stats['entropy']:.3f}  "
                       f"{common.format_time(elapsed)} (eta {common.format_time(eta)})",
                       flush=True)
-    except StopIteration:
-        pass
     except KeyboardInterrupt:
         interrupted = True
         print("\ninterrupted: saving the model and the logs", flush=True)

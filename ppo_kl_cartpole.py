@@ -250,7 +250,7 @@ def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret,
     for epoch in range(cfg.update_epochs):
         order = torch.randperm(batch_size, device=b_obs.device)
         for start in range(0, batch_size - mb_size + 1, mb_size):
-            mb = order[start:start + mb_size]
+            mb = order[start:start + mb_size]  # this minibatch's rows of the batch
             mb_adv = b_adv[mb]
             if cfg.norm_adv:
                 mb_adv = (mb_adv - mb_adv.mean()) / (mb_adv.std(unbiased=False) + 1e-8)
@@ -332,6 +332,8 @@ def train(cfg: Config):
 
             # --- collect: T steps of N envs with the current policy (pi_old) ---
             for t in range(T):
+                # obs = next_obs: the trap of every hand-written loop. The action (and its
+                # value) belong to obs; next_obs is only where they led.
                 obs = next_obs
                 with torch.no_grad():
                     dist = Categorical(logits=policy(obs))
@@ -340,8 +342,6 @@ def train(cfg: Config):
                 next_obs, reward, terminated, truncated, _ = envs.step(action.cpu().numpy())
                 global_step += N
                 buffer.store(t, obs, action, logp, reward, terminated, truncated, valid=~autoreset)
-                # obs = next_obs: the trap of every hand-written loop. The value
-                # and the action belong to obs; next_obs is where they led.
                 next_obs = torch.as_tensor(next_obs, dtype=torch.float32, device=device)
 
                 ep_return += reward
@@ -357,7 +357,9 @@ def train(cfg: Config):
                           f"at step {global_step} (episode {len(episode_returns)}) after {time.time() - start_time:.1f}s",
                           flush=True)
                     if cfg.stop_when_solved:
-                        raise StopIteration  # leave both loops; the partial rollout is not used
+                        break
+            if solved_step is not None and cfg.stop_when_solved:
+                break  # done: the partial rollout is not used for an update
             # --- advantages: values of the whole rollout in one batch ---
             with torch.no_grad():
                 values = value_net(buffer.obs)  # (T, N)
@@ -391,8 +393,6 @@ def train(cfg: Config):
                       f"kl {stats['kl']:.4f}  beta {stats['beta']:.3g}  entropy {stats['entropy']:.3f}  "
                       f"{common.format_time(elapsed)} (eta {common.format_time(eta)})",
                       flush=True)
-    except StopIteration:
-        pass
     except KeyboardInterrupt:
         interrupted = True
         print("\ninterrupted: saving the model and the logs", flush=True)
