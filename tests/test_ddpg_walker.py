@@ -117,6 +117,28 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
     assert np.mean(returns) == pytest.approx(result["evaluations"][-1][1])
 
 
+@pytest.mark.parametrize("env_id", ["Hopper-v5", "HalfCheetah-v5", "InvertedPendulum-v5"])
+def test_other_mujoco_tasks_run(tmp_path, env_id):
+    result = ddpg.train(small(tmp_path, env_id=env_id, total_timesteps=300, start_steps=200, eval_every=300,
+                              eval_episodes=1, gifs=False))
+    assert result["global_step"] == 300 and len(result["evaluations"]) == 1
+    ckpt = torch.load(result["run_dir"] / "model.pt", weights_only=True)
+    assert ckpt["config"]["env_id"] == env_id
+
+
+def test_resume_continues_from_the_saved_step(tmp_path):
+    first = ddpg.train(small(tmp_path / "a", gifs=False))
+    saved = torch.load(first["run_dir"] / "model.pt", weights_only=True)
+    second = ddpg.train(small(tmp_path / "b", gifs=False, total_timesteps=900, start_steps=100,
+                              resume=str(first["run_dir"] / "model.pt")))
+    assert [step for step, _, _ in second["evaluations"]] == [900]  # steps 601..900, evaluated at 900
+    resumed = torch.load(second["run_dir"] / "model.pt", weights_only=True)
+    assert resumed["global_step"] == 900
+    # It started from the saved weights (Adam's step count carried on), not from scratch.
+    first_state = saved["actor_opt"]["state"][0]["step"].item()
+    assert resumed["actor_opt"]["state"][0]["step"].item() == first_state + 300 - 100
+
+
 def test_same_seed_same_evaluations(tmp_path):
     a, b = [ddpg.train(small(tmp_path / str(i), gifs=False, seed=5)) for i in range(2)]
     assert (a["run_dir"] / "evaluations.csv").read_text() == (b["run_dir"] / "evaluations.csv").read_text()
