@@ -348,10 +348,7 @@ def play(cfg: Config):
     """--eval PATH: load a saved model and play cfg.eval_episodes greedy episodes."""
     ckpt = common.load_checkpoint(cfg.eval, required=("model", "obs_dim", "n_actions", "config"))
     model = ActorCritic(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
-    try:
-        model.load_state_dict(ckpt["model"])
-    except RuntimeError as e:
-        raise common.UserError(f"{cfg.eval} does not fit this script's ActorCritic: {str(e).splitlines()[0]}") from None
+    common.load_weights(model, ckpt["model"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
     returns = common.evaluate(env_id, greedy(model, "cpu"), cfg.eval_episodes, cfg.eval_seed,
                               render_mode="human" if cfg.watch else None)

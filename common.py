@@ -445,6 +445,14 @@ def require_display():
                         "drop --watch (GIFs are written to the run folder) or run where DISPLAY is set")
 
 
+def load_weights(module, state_dict, path):
+    """module.load_state_dict(state_dict), with a UserError naming `path` if it does not fit."""
+    try:
+        module.load_state_dict(state_dict)
+    except (RuntimeError, ValueError, KeyError) as e:  # shapes, keys or optimizer groups differ
+        raise UserError(f"{path} does not fit this script's {type(module).__name__}: {str(e).splitlines()[0]}") from None
+
+
 def pick_device(cuda):
     """torch.device("cuda") if asked for and present, else the CPU."""
     if cuda and not torch.cuda.is_available():

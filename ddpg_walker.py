@@ -353,11 +353,8 @@ def load(path, nets):
     """Load a checkpoint into (actor, critic, actor_target, critic_target, actor_opt, critic_opt)."""
     keys = ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic_opt")
     ckpt = common.load_checkpoint(path, required=keys + ("global_step",))
-    try:
-        for key, obj in zip(keys, nets):
-            obj.load_state_dict(ckpt[key])
-    except (RuntimeError, ValueError, KeyError) as e:
-        raise common.UserError(f"{path} does not fit this run's networks: {str(e).splitlines()[0]}") from None
+    for key, obj in zip(keys, nets):
+        common.load_weights(obj, ckpt[key], path)
     return ckpt
 
 
@@ -366,10 +363,7 @@ def play(cfg: Config):
     ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low", "high", "config"))
     actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"], np.array(ckpt["low"]),
                   np.array(ckpt["high"]))
-    try:
-        actor.load_state_dict(ckpt["actor"])
-    except RuntimeError as e:
-        raise common.UserError(f"{cfg.eval} does not fit this script's Actor: {str(e).splitlines()[0]}") from None
+    common.load_weights(actor, ckpt["actor"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
     returns = common.evaluate(env_id, deterministic(actor, torch.device("cpu")), cfg.eval_episodes, cfg.eval_seed,
                               render_mode="human" if cfg.watch else None)

@@ -400,10 +400,7 @@ def play(cfg: Config):
     """--eval PATH: load a saved model and play cfg.eval_episodes greedy episodes."""
     ckpt = common.load_checkpoint(cfg.eval, required=("policy", "obs_dim", "n_actions", "config"))
     policy = PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
-    try:
-        policy.load_state_dict(ckpt["policy"])
-    except RuntimeError as e:
-        raise common.UserError(f"{cfg.eval} does not fit this script's PolicyNetwork: {str(e).splitlines()[0]}") from None
+    common.load_weights(policy, ckpt["policy"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
     returns = common.evaluate(env_id, greedy(policy, "cpu"), cfg.eval_episodes, cfg.eval_seed,
                               render_mode="human" if cfg.watch else None)

@@ -304,3 +304,10 @@ def test_adam_matches_torch_optim_adam():
         torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6)
     # ...and they moved: equal because both stepped alike, not because neither stepped.
     assert all(not torch.allclose(a, s) for a, s in zip(net_a.parameters(), start.parameters()))
+
+
+def test_load_weights_mismatch_is_a_user_error():
+    small, big = torch.nn.Linear(3, 2), torch.nn.Linear(5, 2)
+    common.load_weights(small, torch.nn.Linear(3, 2).state_dict(), "ok.pt")
+    with pytest.raises(common.UserError, match="other.pt does not fit this script's Linear"):
+        common.load_weights(small, big.state_dict(), "other.pt")
