@@ -189,7 +189,7 @@ def a2c_loss(model, buffer, next_obs, cfg):
     with torch.no_grad():  # targets are constants: no gradient flows into the bootstrap
         # V(s_{t+1}) is the value of the next stored obs. After a done step that obs is the
         # episode's real final observation (the reset step reports it), so a truncated step
-        # bootstraps from it and a terminated one ignores it (common.discounted_returns).
+        # bootstraps from it and a terminated one ignores it (common.gae).
         next_values = values[1:]  # (T, N)
         # With lam = 1: A_t = R_t - V(s_t), R_t = r_t + gamma r_{t+1} + ... + gamma^k V(s_{t+k}), the n-step
         # return up to the rollout's end (Mnih et al. 2016, Algorithm S3). lam < 1 is GAE (Schulman et al. 2016, eq. 16).

@@ -141,8 +141,8 @@ class Adam:
         v_t = beta2 * v_{t-1} + (1 - beta2) * g_t^2
         theta_t = theta_{t-1} - lr * (m_t / (1 - beta1^t)) / (sqrt(v_t / (1 - beta2^t)) + eps)
 
-    It has the interface our loops use: zero_grad(), step(), param_groups[0]["lr"]
-    and state_dict(); tests/test_common.py checks it against torch.optim.Adam.
+    It has the interface our loops use: zero_grad(), step() and
+    param_groups[0]["lr"]; tests/test_common.py checks it against torch.optim.Adam.
     """
 
     def __init__(self, params, lr, betas=(0.9, 0.999), eps=1e-8):
@@ -163,10 +163,6 @@ class Adam:
                    self.state_steps, fused=True, amsgrad=False, beta1=group["betas"][0],
                    beta2=group["betas"][1], lr=group["lr"], weight_decay=0.0, eps=group["eps"],
                    maximize=False)
-
-    def state_dict(self):
-        return dict(exp_avgs=self.exp_avgs, exp_avg_sqs=self.exp_avg_sqs, state_steps=self.state_steps,
-                    lr=self.param_groups[0]["lr"])
 
 
 # =============================================================================
@@ -456,7 +452,7 @@ def load_weights(module, state_dict, path):
 def pick_device(cuda):
     """torch.device("cuda") if asked for and present, else the CPU."""
     if cuda and not torch.cuda.is_available():
-        print("--cuda: no GPU found, using the CPU", flush=True)
+        print("no GPU found: training on the CPU", flush=True)
     return torch.device("cuda" if cuda and torch.cuda.is_available() else "cpu")
 
 
