@@ -28,13 +28,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 import torch.nn as nn
-from torch.distributions import Categorical
 
 import common
 
-# torch.distributions checks its arguments on every call; in this loop the
-# checks cost more than the network itself, and our inputs are always valid.
-torch.distributions.Distribution.set_default_validate_args(False)
 
 @dataclass
 class Config:
@@ -51,23 +47,27 @@ class Config:
     """the return that counts as solved; none = the env's reward_threshold (475 for CartPole-v1)"""
 
     # --- collection ---
-    num_envs: int = 4
+    num_envs: int = 8
     """parallel envs in the vector env; more envs = more diverse batches, fewer updates per env step"""
     num_steps: int = 32
-    """steps per env per rollout; the batch is num_envs * num_steps transitions (here 128)"""
+    """steps per env per rollout; the batch is num_envs * num_steps transitions (here 256)"""
 
     # --- PPO ---
-    learning_rate: float = 2.5e-3
-    """Adam step size for both networks (PPO on CartPole: 3e-4 .. 3e-3)"""
+    learning_rate: float = 4e-3
+    """Adam step size for both networks (PPO: 3e-4 .. 3e-3 is usual; CartPole takes more)"""
     anneal_lr: bool = True
     """decay the learning rate linearly to 0 over total_timesteps"""
-    gamma: float = 0.98
-    """discount factor; 0.98 .. 0.999. CartPole is long (500 steps) but forgiving"""
-    lam: float = 0.8
+    gamma: float = 0.99
+    """discount factor; 0.98 .. 0.999. 0.99 looks ~100 steps ahead"""
+    reward_scale: float = 0.05
+    """rewards are multiplied by this for learning (returns are logged unscaled): discounted returns near
+    100 become near 5, targets V reaches within a few Adam steps, so the advantages are useful sooner
+    (1.0 = off; PPO-clip then took 40% more steps to solve, median of seeds 0-29)"""
+    lam: float = 0.95
     """GAE lambda: 0 = one-step TD advantages (low variance), 1 = Monte Carlo (no bias); usually 0.8 .. 0.97"""
     update_epochs: int = 10
     """passes over each batch (tutorial 000 uses 10)"""
-    num_minibatches: int = 2
+    num_minibatches: int = 4
     """minibatches per epoch; minibatch size = batch / num_minibatches"""
     norm_adv: bool = True
     """normalize advantages to mean 0, std 1 within each minibatch"""
@@ -110,8 +110,8 @@ class Config:
     """train on the GPU if there is one (CartPole's tiny networks are faster on the CPU)"""
 
     def __post_init__(self):
-        for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches",
-                     "hidden", "print_every", "eval_episodes", "threads", "learning_rate", "d_targ", "beta_init"):
+        for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches", "hidden",
+                     "print_every", "eval_episodes", "threads", "learning_rate", "reward_scale", "d_targ", "beta_init"):
             common.check(getattr(self, name) > 0, f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
         for name in ("ent_coef", "vf_coef", "max_grad_norm"):
             common.check(getattr(self, name) >= 0, f"--{name.replace('_', '-')} must be >= 0, got {getattr(self, name)}")
@@ -148,7 +148,7 @@ class PolicyNetwork(nn.Module):
         )
 
     def forward(self, obs):
-        return self.net(obs)  # logits, (B, n_actions); softmax happens inside Categorical
+        return self.net(obs)  # logits, (B, n_actions); pi(.|s) = softmax(logits)
 
 
 class ValueNetwork(nn.Module):
@@ -172,24 +172,28 @@ class ValueNetwork(nn.Module):
 
 
 class RolloutBuffer:
-    """num_steps x num_envs transitions, stored as (T, N, ...) tensors."""
+    """num_steps x num_envs transitions, stored as (T, N, ...) numpy arrays.
 
-    def __init__(self, T, N, obs_dim, device):
-        self.obs = torch.zeros(T, N, obs_dim, device=device)
-        self.actions = torch.zeros(T, N, dtype=torch.long, device=device)
-        self.logp = torch.zeros(T, N, device=device)  # log pi_old(a|s), frozen at collection
-        self.rewards = torch.zeros(T, N, device=device)
-        self.terminated = torch.zeros(T, N, dtype=torch.bool, device=device)
-        self.truncated = torch.zeros(T, N, dtype=torch.bool, device=device)
+    The envs speak numpy, so the loop stores their outputs as they come and
+    get_batch turns the whole rollout into tensors once, not at every step.
+    """
+
+    def __init__(self, T, N, obs_dim):
+        self.obs = np.zeros((T, N, obs_dim), dtype=np.float32)
+        self.actions = np.zeros((T, N), dtype=np.int64)
+        self.rewards = np.zeros((T, N), dtype=np.float32)
+        self.terminated = np.zeros((T, N), dtype=bool)
+        self.truncated = np.zeros((T, N), dtype=bool)
         # False where the step was a vector-env autoreset step (see the loop).
-        self.valid = torch.ones(T, N, dtype=torch.bool, device=device)
+        self.valid = np.ones((T, N), dtype=bool)
 
-    def store(self, t, obs, action, logp, reward, terminated, truncated, valid):
-        self.obs[t], self.actions[t], self.logp[t] = obs, action, logp
-        self.rewards[t] = torch.as_tensor(reward)
-        self.terminated[t] = torch.as_tensor(terminated)
-        self.truncated[t] = torch.as_tensor(truncated)
-        self.valid[t] = torch.as_tensor(valid)
+    def store(self, t, obs, action, reward, terminated, truncated, valid):
+        self.obs[t], self.actions[t], self.rewards[t] = obs, action, reward
+        self.terminated[t], self.truncated[t], self.valid[t] = terminated, truncated, valid
+
+    def get_batch(self, device):
+        """Every field as a tensor on `device`, still shaped (T, N, ...)."""
+        return {name: torch.as_tensor(array, device=device) for name, array in vars(self).items()}
 
 
 def exact_kl(log_probs_old, log_probs):
@@ -251,12 +255,12 @@ def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret,
         order = torch.randperm(batch_size, device=b_obs.device)
         for start in range(0, batch_size - mb_size + 1, mb_size):
             mb = order[start:start + mb_size]  # this minibatch's rows of the batch
-            mb_adv = b_adv[mb]
+            mb_obs, mb_adv = b_obs[mb], b_adv[mb]
             if cfg.norm_adv:
                 mb_adv = (mb_adv - mb_adv.mean()) / (mb_adv.std(unbiased=False) + 1e-8)
-            loss_pi, log_probs = compute_loss_pi(policy, b_obs[mb], b_act[mb], mb_adv, b_logp[mb],
+            loss_pi, log_probs = compute_loss_pi(policy, mb_obs, b_act[mb], mb_adv, b_logp[mb],
                                                  b_log_probs_old[mb], beta)
-            loss_v = compute_loss_v(value_net, b_obs[mb], b_ret[mb])
+            loss_v = compute_loss_v(value_net, mb_obs, b_ret[mb])
             # L = L_KLPEN - c1 * L_VF + c2 * S[pi], maximized  (Schulman et al. 2017, eq. 9 with L_KLPEN for L_CLIP).
             # The networks are separate, so c1 only matters through the shared gradient clip.
             loss = loss_pi + cfg.vf_coef * loss_v
@@ -310,7 +314,7 @@ def train(cfg: Config):
     # common.Adam is torch.optim.Adam's update without its 1-second first-use import (see its docstring).
     optimizer = common.Adam([*policy.parameters(), *value_net.parameters()], lr=cfg.learning_rate, eps=1e-5)
     T, N = cfg.num_steps, cfg.num_envs
-    buffer = RolloutBuffer(T, N, obs_dim, device)
+    buffer = RolloutBuffer(T, N, obs_dim)
     num_updates = cfg.total_timesteps // (T * N)
 
     # --- episode bookkeeping ---
@@ -323,7 +327,6 @@ def train(cfg: Config):
     autoreset = np.zeros(N, dtype=bool)
     global_step, solved_step, update, interrupted = 0, None, 0, False
     beta = cfg.beta_init
-    next_obs = torch.as_tensor(next_obs, dtype=torch.float32, device=device)
 
     try:
         for update in range(1, num_updates + 1):
@@ -336,13 +339,13 @@ def train(cfg: Config):
                 # value) belong to obs; next_obs is only where they led.
                 obs = next_obs
                 with torch.no_grad():
-                    dist = Categorical(logits=policy(obs))
-                    action = dist.sample()
-                    logp = dist.log_prob(action)
-                next_obs, reward, terminated, truncated, _ = envs.step(action.cpu().numpy())
+                    probs = torch.softmax(policy(torch.as_tensor(obs, dtype=torch.float32, device=device)), dim=-1)
+                # a ~ pi(.|s): what Categorical(probs).sample() does, without building a distribution
+                # object at every step (its log-probs are computed for the whole batch below).
+                action = torch.multinomial(probs, 1).squeeze(1).cpu().numpy()  # (N,)
+                next_obs, reward, terminated, truncated, _ = envs.step(action)
                 global_step += N
-                buffer.store(t, obs, action, logp, reward, terminated, truncated, valid=~autoreset)
-                next_obs = torch.as_tensor(next_obs, dtype=torch.float32, device=device)
+                buffer.store(t, obs, action, cfg.reward_scale * reward, terminated, truncated, valid=~autoreset)
 
                 ep_return += reward
                 done = terminated | truncated
@@ -360,21 +363,26 @@ def train(cfg: Config):
                         break
             if solved_step is not None and cfg.stop_when_solved:
                 break  # done: the partial rollout is not used for an update
-            # --- advantages: values of the whole rollout in one batch ---
+            # --- pi_old and V of the whole rollout in one batch, then advantages ---
+            rollout = buffer.get_batch(device)  # (T, N, ...) tensors
             with torch.no_grad():
-                values = value_net(buffer.obs)  # (T, N)
+                # log pi_old(a|s): the policy has not changed since it chose these actions.
+                log_probs = torch.log_softmax(policy(rollout["obs"]), dim=-1)  # (T, N, n_actions)
+                logp_old = log_probs.gather(-1, rollout["actions"].unsqueeze(-1)).squeeze(-1)  # (T, N)
+                values = value_net(rollout["obs"])  # (T, N)
                 # V(s_{t+1}) is the value of the next stored obs. After a done step that obs is
                 # the episode's real final observation (the reset step reports it), so a
                 # truncated step bootstraps from it and a terminated one ignores it (common.gae).
-                next_values = torch.cat([values[1:], value_net(next_obs)[None]])  # (T, N)
-                advantages = common.gae(buffer.rewards, values, next_values, buffer.terminated,
-                                        buffer.truncated, cfg.gamma, cfg.lam)  # (T, N)
+                last_value = value_net(torch.as_tensor(next_obs, dtype=torch.float32, device=device))  # (N,)
+                next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
+                advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
+                                        rollout["truncated"], cfg.gamma, cfg.lam)  # (T, N)
                 returns = advantages + values  # value targets R_t = A_t + V(s_t), detached
 
             # --- update: flatten (T, N) to a batch, dropping the autoreset steps ---
-            keep = buffer.valid.reshape(-1)
-            b_obs = buffer.obs.reshape(T * N, obs_dim)[keep]
-            b_act, b_logp = buffer.actions.reshape(-1)[keep], buffer.logp.reshape(-1)[keep]
+            keep = rollout["valid"].reshape(-1)
+            b_obs = rollout["obs"].reshape(T * N, obs_dim)[keep]
+            b_act, b_logp = rollout["actions"].reshape(-1)[keep], logp_old.reshape(-1)[keep]
             b_adv, b_ret = advantages.reshape(-1)[keep], returns.reshape(-1)[keep]
             stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret, beta, cfg)
             stats["beta"] = beta  # the beta this update used
