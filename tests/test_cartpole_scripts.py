@@ -47,7 +47,7 @@ def test_smoke_run_writes_gifs_model_and_csv(script, tmp_path):
 
 @pytest.mark.slow
 def test_learns_cartpole_with_a_fixed_seed(script, tmp_path):
-    """The defaults solve CartPole well inside a 60k-step budget (median ~20k over seeds 0-9)."""
+    """The defaults solve CartPole well inside a 60k-step budget (median steps over seeds 0-9: README)."""
     result = script.train(small(script, tmp_path, seed=1, total_timesteps=60_000, gifs=False, eval_episodes=5))
     assert result["solved"], f"not solved in {result['global_step']} steps"
     assert np.mean(result["episode_returns"][-20:]) >= 475
