@@ -314,7 +314,7 @@ def train(cfg: Config):
                 eta = elapsed / global_step * (cfg.total_timesteps - global_step)
                 print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  running reward {running_reward:6.1f}  "
                       f"return(20) {mean20:6.1f}  episodes {len(episode_returns):5d}  loss_pi {stats['loss_pi']:+.3f}  "
-                      f"loss_v {stats['loss_v']:6.3f}  entropy {stats['entropy']:.3f}  "
+                      f"loss_v {stats['loss_v']:.2e}  entropy {stats['entropy']:.3f}  "
                       f"{common.format_time(elapsed)} (eta {common.format_time(eta)})",
                       flush=True)
     except KeyboardInterrupt:

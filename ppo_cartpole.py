@@ -373,7 +373,7 @@ def train(cfg: Config):
                 elapsed = time.time() - start_time
                 eta = elapsed / global_step * (cfg.total_timesteps - global_step)
                 print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  return(20) {mean20:6.1f}  "
-                      f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:7.3f}  "
+                      f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:.2e}  "
                       f"approx_kl {stats['approx_kl']:.4f}  entropy {stats['entropy']:.3f}  "
                       f"clipfrac {stats['clipfrac']:.3f}  {common.format_time(elapsed)} (eta {common.format_time(eta)})",
                       flush=True)
