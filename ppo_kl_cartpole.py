@@ -241,12 +241,11 @@ def policy_shift(policy, obs, log_probs_old):
                 entropy=-(log_probs.exp() * log_probs).sum(-1).mean().item())
 
 
-def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret, beta, cfg):
-    """update_epochs passes of shuffled minibatches over one batch. Returns stats for the log."""
-    # pi_old in full (every action's probability) for the exact KL. The policy has not
-    # changed since collection, so this is the distribution the actions (and b_logp) came from.
-    with torch.no_grad():
-        b_log_probs_old = torch.log_softmax(policy(b_obs), dim=-1)  # (B, n_actions)
+def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_log_probs_old, b_adv, b_ret, beta, cfg):
+    """update_epochs passes of shuffled minibatches over one batch. Returns stats for the log.
+
+    b_log_probs_old is pi_old in full, (B, n_actions): every action's log-probability, for the exact KL.
+    """
     params = list(policy.parameters()) + list(value_net.parameters())
     batch_size = b_obs.shape[0]
     mb_size = max(batch_size // cfg.num_minibatches, 1)
@@ -383,8 +382,10 @@ def train(cfg: Config):
             keep = rollout["valid"].reshape(-1)
             b_obs = rollout["obs"].reshape(T * N, obs_dim)[keep]
             b_act, b_logp = rollout["actions"].reshape(-1)[keep], logp_old.reshape(-1)[keep]
+            b_log_probs_old = log_probs.reshape(T * N, n_actions)[keep]  # pi_old in full, for the exact KL
             b_adv, b_ret = advantages.reshape(-1)[keep], returns.reshape(-1)[keep]
-            stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret, beta, cfg)
+            stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_log_probs_old, b_adv, b_ret,
+                               beta, cfg)
             stats["beta"] = beta  # the beta this update used
             beta = adapt_beta(beta, stats["kl"], cfg)  # and the one the next update will use
 
