@@ -245,14 +245,21 @@ def before_after_gifs(env_id, run_dir, untrained, trained, seed, **gif_kwargs):
 # =============================================================================
 
 
-def make_env(env_id, **kwargs):
-    """gym.make, with a clear UserError for an unknown id or a missing extra."""
+@contextlib.contextmanager
+def env_errors(env_id):
+    """Turn gymnasium's errors for an unknown id or a missing extra into one clear UserError."""
     try:
-        return gym.make(env_id, **kwargs)
+        yield
     except (ImportError, gym.error.DependencyNotInstalled) as e:  # e.g. MuJoCo missing; before its base class
         raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
     except gym.error.Error as e:  # NameNotFound, VersionNotFound, ...
         raise UserError(f"unknown environment {env_id!r}: {e}") from None
+
+
+def make_env(env_id, **kwargs):
+    """gym.make, with a clear UserError for an unknown id or a missing extra."""
+    with env_errors(env_id):
+        return gym.make(env_id, **kwargs)
 
 
 def make_vec_env(env_id, num_envs, seed):
@@ -262,12 +269,8 @@ def make_vec_env(env_id, num_envs, seed):
     episode ends returns the first observation of the next episode, with reward
     0, and ignores the action. Scripts must drop that step from their batches.
     """
-    try:
+    with env_errors(env_id):
         envs = gym.make_vec(env_id, num_envs=num_envs)
-    except (ImportError, gym.error.DependencyNotInstalled) as e:
-        raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
-    except gym.error.Error as e:
-        raise UserError(f"unknown environment {env_id!r}: {e}") from None
     mode = envs.metadata.get("autoreset_mode", gym.vector.AutoresetMode.NEXT_STEP)
     if mode != gym.vector.AutoresetMode.NEXT_STEP:
         raise UserError(f"{env_id}: expected NEXT_STEP autoreset, got {mode}")
@@ -286,10 +289,8 @@ def solve_threshold(env_id, override=None):
     """The return that counts as solved: `override`, else the env's reward_threshold."""
     if override is not None:
         return override
-    try:
+    with env_errors(env_id):
         threshold = gym.spec(env_id).reward_threshold
-    except gym.error.Error as e:
-        raise UserError(f"unknown environment {env_id!r}: {e}") from None
     if threshold is None:
         raise UserError(f"{env_id} has no reward_threshold; pass --solved-return")
     return threshold
