@@ -11,7 +11,9 @@ waiting for an episode to end. The loop, top to bottom:
     returns  advantages A_t by GAE(lambda) (common.gae), bootstrapped from V at the
              rollout's end and at time-limit truncations; with lam = 1 this is A3C's
              n-step advantage R_t - V(s_t). Critic targets R_t = A_t + V(s_t)
-    update   one gradient step on -log pi(a|s) * A + c_v * Huber(V, R) - c_e * entropy
+    update   one pass over the rollout in num_minibatches random minibatches, one gradient step
+             on -log pi(a|s) * A + c_v * Huber(V, R) - c_e * entropy for each: every transition
+             is used once (PPO reuses each one for many epochs, behind its clip)
     log      one progress.csv row per update; a progress line now and then
 
     python actor_critic_cartpole.py                  # train until solved
@@ -54,26 +56,29 @@ class Config:
     """the return that counts as solved; none = the env's reward_threshold (475 for CartPole-v1)"""
 
     # --- collection ---
-    num_envs: int = 8
-    """parallel envs (A3C's parallel actors, here in lockstep); more envs = less correlated batches"""
-    num_steps: int = 64
+    num_envs: int = 2
+    """parallel envs (A3C's parallel actors, here in lockstep)"""
+    num_steps: int = 256
     """steps per env between updates, the n of the n-step return (A3C: 5 .. 20; long rollouts carry
     CartPole's sparse signal, failure, back further with each update)"""
+    num_minibatches: int = 8
+    """the rollout is split into this many random minibatches, one gradient step each, every transition
+    used once (1 = the classic A2C single step per rollout; A3C's actors each applied their own gradient)"""
 
     # --- A2C ---
-    learning_rate: float = 0.01
+    learning_rate: float = 0.0035
     """Adam step size (tutorial 004: 0.01, one step per episode; A2C usually 7e-4 .. 1e-2)"""
     anneal_lr: bool = False
     """decay the learning rate linearly to 0 over total_timesteps"""
-    gamma: float = 0.98
-    """discount factor (tutorial 004: 0.99); 0.98 looks 50 steps ahead, enough to keep a pole up"""
+    gamma: float = 0.99
+    """discount factor (tutorial 004: 0.99)"""
     lam: float = 1.0
     """GAE lambda: 1 = A3C's n-step return minus V (no bias from V inside the rollout), lower = less variance"""
     norm_adv: bool = True
     """normalize advantages to mean 0, std 1 in each batch (tutorial 004 normalizes its returns, to the same end)"""
     ent_coef: float = 0.01
     """entropy bonus weight (A3C: 0.01); keeps the policy from collapsing early"""
-    vf_coef: float = 0.5
+    vf_coef: float = 1.0
     """critic loss weight: the trunk is shared, so this balances the two heads' gradients"""
     reward_scale: float | None = None
     """rewards are multiplied by this for learning (returns are logged unscaled); none = 1 - gamma, which
@@ -109,8 +114,8 @@ class Config:
     """train on the GPU if there is one (CartPole's tiny network is faster on the CPU)"""
 
     def __post_init__(self):
-        for name in ("total_timesteps", "num_envs", "num_steps", "hidden", "print_every", "eval_episodes", "threads",
-                     "learning_rate", "huber_delta"):
+        for name in ("total_timesteps", "num_envs", "num_steps", "num_minibatches", "hidden", "print_every",
+                     "eval_episodes", "threads", "learning_rate", "huber_delta"):
             common.check(getattr(self, name) > 0, f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
         for name in ("ent_coef", "vf_coef", "max_grad_norm"):
             common.check(getattr(self, name) >= 0, f"--{name.replace('_', '-')} must be >= 0, got {getattr(self, name)}")
@@ -120,6 +125,9 @@ class Config:
                      f"--reward-scale must be positive or none, got {self.reward_scale}")
         common.check(0 < self.running_reward_alpha <= 1,
                      f"--running-reward-alpha must be in (0, 1], got {self.running_reward_alpha}")
+        common.check(self.num_minibatches <= self.num_envs * self.num_steps,
+                     f"--num-minibatches ({self.num_minibatches}) must be at most num_envs x num_steps "
+                     f"({self.num_envs * self.num_steps})")
 
 
 # =============================================================================
@@ -177,16 +185,14 @@ class RolloutBuffer:
         self.valid[t] = torch.as_tensor(valid)
 
 
-def a2c_loss(model, buffer, next_obs, cfg):
-    """The A2C loss on one rollout. Returns (loss, stats)."""
-    T, N = buffer.actions.shape
-    # One forward pass over the rollout plus the observation after it. The policy has not
-    # changed since collection, so these are the log-probs and values of the actions taken.
-    logits, values = model(torch.cat([buffer.obs, next_obs[None]]))  # (T+1, N, A), (T+1, N)
-    log_probs = torch.log_softmax(logits[:T], dim=-1)  # log pi(.|s), (T, N, A)
-    logp = log_probs.gather(-1, buffer.actions.unsqueeze(-1)).squeeze(-1)  # log pi(a|s), (T, N)
+def a2c_targets(model, buffer, next_obs, cfg):
+    """Advantages and critic targets for one rollout, flattened to its real transitions.
 
+    Returns (obs, actions, advantages, returns), each with one row per valid step."""
+    T, N = buffer.actions.shape
     with torch.no_grad():  # targets are constants: no gradient flows into the bootstrap
+        # One forward pass over the rollout plus the observation after it: V(s_0 .. s_T).
+        _, values = model(torch.cat([buffer.obs, next_obs[None]]))  # (T+1, N)
         # V(s_{t+1}) is the value of the next stored obs. After a done step that obs is the
         # episode's real final observation (the reset step reports it), so a truncated step
         # bootstraps from it and a terminated one ignores it (common.gae).
@@ -198,15 +204,22 @@ def a2c_loss(model, buffer, next_obs, cfg):
         returns = advantages + values[:T]  # critic targets (T, N)
     keep = buffer.valid  # drop the autoreset steps: their transition is not real
     adv = advantages[keep]
-    if cfg.norm_adv:
+    if cfg.norm_adv:  # over the whole rollout, before it is split into minibatches
         adv = (adv - adv.mean()) / (adv.std(unbiased=False) + 1e-8)
+    return buffer.obs[keep], buffer.actions[keep], adv, returns[keep]
 
+
+def a2c_loss(model, obs, actions, advantages, returns, cfg):
+    """The A2C loss on a batch of transitions. Returns (loss, stats)."""
+    logits, values = model(obs)
+    log_probs = torch.log_softmax(logits, dim=-1)  # log pi(.|s), (B, A)
+    logp = log_probs.gather(-1, actions.unsqueeze(-1)).squeeze(-1)  # log pi(a|s), (B,)
     # Policy gradient: grad log pi(a_t|s_t) * A_t  (Mnih et al. 2016, section 4); we minimize its negative.
-    loss_pi = -(logp[keep] * adv).mean()
+    loss_pi = -(logp * advantages).mean()
     # Critic: Huber loss between V(s_t) and R_t, as in tutorial 004 (less sensitive to outlier returns than MSE).
-    loss_v = F.huber_loss(values[:T][keep], returns[keep], delta=cfg.huber_delta)
+    loss_v = F.huber_loss(values, returns, delta=cfg.huber_delta)
     # Entropy bonus H(pi(.|s)) = -sum_a pi log pi  (Mnih et al. 2016, section 4), keeps exploring.
-    entropy = -(log_probs.exp() * log_probs).sum(-1)[keep].mean()
+    entropy = -(log_probs.exp() * log_probs).sum(-1).mean()
     loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
     return loss, dict(loss_pi=loss_pi.detach(), loss_v=loss_v.detach(), entropy=entropy.detach())
 
@@ -295,13 +308,18 @@ def train(cfg: Config):
                         break
             if solved_step is not None and cfg.stop_when_solved:
                 break  # done: the partial rollout is not used for an update
-            # --- update: one gradient step on the whole rollout ---
-            loss, stats = a2c_loss(model, buffer, next_obs, cfg)
-            optimizer.zero_grad()
-            loss.backward()
-            nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm, foreach=True)
-            optimizer.step()
-            stats = {k: v.item() for k, v in stats.items()}
+            # --- update: one pass over the rollout, one gradient step per minibatch ---
+            # Each transition is used once. After the first step the policy has moved a little
+            # from the one that acted, as A3C's parameters moved between an actor's rollout and
+            # its gradient landing; no correction is made for it (PPO's ratio and clip do that).
+            obs_b, actions_b, adv_b, returns_b = a2c_targets(model, buffer, next_obs, cfg)
+            for mb in torch.randperm(len(adv_b), device=device).chunk(cfg.num_minibatches):
+                loss, stats = a2c_loss(model, obs_b[mb], actions_b[mb], adv_b[mb], returns_b[mb], cfg)
+                optimizer.zero_grad()
+                loss.backward()
+                nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm, foreach=True)
+                optimizer.step()
+            stats = {k: v.item() for k, v in stats.items()}  # of the last minibatch
 
             # --- logging ---
             mean20 = float(np.mean(last20)) if last20 else float("nan")
