@@ -125,9 +125,8 @@ class Config:
                      f"--reward-scale must be positive or none, got {self.reward_scale}")
         common.check(0 < self.running_reward_alpha <= 1,
                      f"--running-reward-alpha must be in (0, 1], got {self.running_reward_alpha}")
-        common.check(self.num_minibatches <= self.num_envs * self.num_steps,
-                     f"--num-minibatches ({self.num_minibatches}) must be at most num_envs x num_steps "
-                     f"({self.num_envs * self.num_steps})")
+        common.check(self.num_envs * self.num_steps >= self.num_minibatches,
+                     f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({self.num_envs * self.num_steps})")
 
 
 # =============================================================================

@@ -1,11 +1,10 @@
-"""A2C's own pieces: the n-step targets of a real vector-env rollout, and its minibatch flag."""
+"""A2C's own pieces: the n-step targets of a real vector-env rollout."""
 
 import gymnasium as gym
 import numpy as np
 import torch
 
 import actor_critic_cartpole as a2c
-from conftest import run_script
 
 
 def test_targets_are_n_step_returns_across_truncation_and_autoreset():
@@ -58,9 +57,3 @@ def test_targets_are_n_step_returns_across_truncation_and_autoreset():
     np.testing.assert_allclose(returns.numpy(), expected, rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(adv.numpy(), returns.numpy() - values.numpy(), rtol=1e-5, atol=1e-6)
 
-
-def test_more_minibatches_than_transitions_is_one_line_and_exit_2(tmp_path):
-    p = run_script("actor_critic_cartpole.py", "--num-envs", 2, "--num-steps", 4, "--num-minibatches", 9,
-                   "--run-dir", tmp_path, timeout=120)
-    assert p.returncode == 2 and "Traceback" not in p.stderr
-    assert "--num-minibatches (9) must be at most num_envs x num_steps (8)" in p.stderr

@@ -79,6 +79,7 @@ def test_eval_reloads_the_saved_model(script, tmp_path):
 @pytest.mark.parametrize("args,needle", [
     (["--num-envs", "0"], "--num-envs must be positive"),
     (["--total-timesteps", "-5"], "--total-timesteps must be positive"),
+    (["--num-envs", "2", "--num-steps", "4", "--num-minibatches", "9"], "--num-minibatches (9) exceeds the batch size (8)"),
     (["--learning-rate", "abc"], "invalid float value"),
     (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
     (["--env-id", "Pendulum-v1"], "needs Discrete actions"),
