@@ -83,12 +83,18 @@ class Config:
     """path of a saved model.pt: continue that run's training from its last saved step"""
     cuda: bool = True
     """train on the GPU when there is one"""
+    threads: int = 1
+    """torch CPU threads (1-4). 1 never fights another busy program for a core; the README
+    measures what more threads give on an idle machine"""
 
     def __post_init__(self):
         for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every", "eval_episodes",
-                     "print_every", "actor_lr", "critic_lr"):
+                     "print_every", "actor_lr", "critic_lr", "threads"):
             common.check(getattr(self, name) > 0, f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
-        common.check(self.start_steps >= 0, f"--start-steps must be >= 0, got {self.start_steps}")
+        # The first update samples batch_size transitions: the warm-up must have stored that many.
+        common.check(self.start_steps >= self.batch_size,
+                     f"--start-steps must be at least --batch-size ({self.batch_size}), "
+                     f"got {self.start_steps}")
         common.check(self.expl_noise >= 0, f"--expl-noise must be >= 0, got {self.expl_noise}")
         common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
         common.check(0 < self.tau <= 1, f"--tau must be in (0, 1], got {self.tau}")
@@ -138,39 +144,45 @@ class Critic(nn.Module):
 
 
 class ReplayBuffer:
-    """A ring of the last `size` transitions, kept as one tensor on the training device.
+    """A ring of the last `size` transitions, one named tensor per field, on the training device.
 
-    Each row is [obs, action, reward, next_obs, not_done]. Storing one row per
-    step and sampling by index means a minibatch is a single gather on the
-    device: no numpy -> torch conversion of the batch, no copy to the GPU.
+    Kept as tensors where training runs, a minibatch is one index into each
+    field: no numpy -> torch conversion per batch, no copy to the GPU.
     """
 
     def __init__(self, obs_dim, act_dim, size, device):
-        self.obs_dim, self.act_dim, self.size = obs_dim, act_dim, size
-        self.rows = torch.zeros(size, 2 * obs_dim + act_dim + 2, device=device)
-        self.ptr, self.count = 0, 0
+        self.obs = torch.zeros(size, obs_dim, device=device)       # s   (size, obs_dim)
+        self.action = torch.zeros(size, act_dim, device=device)    # a   (size, act_dim)
+        self.reward = torch.zeros(size, device=device)             # r   (size,)
+        self.next_obs = torch.zeros(size, obs_dim, device=device)  # s'  (size, obs_dim)
+        self.not_done = torch.zeros(size, device=device)           # 1 - terminated  (size,)
+        self.size, self.ptr, self.count = size, 0, 0
 
     def add(self, obs, action, reward, next_obs, terminated):
+        i = self.ptr
+        self.obs[i] = torch.as_tensor(obs)
+        self.action[i] = torch.as_tensor(action)
+        self.reward[i] = float(reward)
+        self.next_obs[i] = torch.as_tensor(next_obs)
         # not_done = 0 only when the episode really ended. A time-limit truncation keeps
         # not_done = 1: the state was not terminal, so its target bootstraps from Q(s', mu(s')).
-        row = np.concatenate([obs, action, [reward], next_obs, [0.0 if terminated else 1.0]])
-        self.rows[self.ptr] = torch.as_tensor(row, dtype=torch.float32)
+        self.not_done[i] = 0.0 if terminated else 1.0
         self.ptr = (self.ptr + 1) % self.size  # wrap around: overwrite the oldest
         self.count = min(self.count + 1, self.size)
 
     def sample(self, batch_size):
-        """A uniformly random minibatch: obs (B, obs_dim), action (B, act_dim), reward, next_obs, not_done (B,)."""
-        idx = torch.randint(0, self.count, (batch_size,), device=self.rows.device)
-        batch = self.rows[idx]
-        o, a = self.obs_dim, self.act_dim
-        return (batch[:, :o], batch[:, o:o + a], batch[:, o + a],
-                batch[:, o + a + 1:2 * o + a + 1], batch[:, -1])
+        """A uniformly random minibatch of stored transitions:
+        obs (B, obs_dim), action (B, act_dim), reward (B,), next_obs (B, obs_dim), not_done (B,)."""
+        idx = torch.randint(0, self.count, (batch_size,), device=self.obs.device)
+        return (self.obs[idx], self.action[idx], self.reward[idx], self.next_obs[idx],
+                self.not_done[idx])
 
 
+@torch.no_grad()
 def soft_update(target, source, tau):
-    """theta' <- tau * theta + (1 - tau) * theta'  (Lillicrap et al. 2016, Algorithm 1), in one fused call."""
-    with torch.no_grad():
-        torch._foreach_lerp_(list(target.parameters()), list(source.parameters()), tau)
+    """theta' <- tau * theta + (1 - tau) * theta'  (Lillicrap et al. 2016, Algorithm 1)."""
+    for p_target, p in zip(target.parameters(), source.parameters()):
+        p_target.mul_(1 - tau).add_(tau * p)
 
 
 def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
@@ -238,24 +250,34 @@ def train(cfg: Config):
     (step, mean, std)), episode_returns, steps_per_second (learning phase) and interrupted."""
     start_time = time.time()
     # --- seeding and setup ---
+    torch.set_num_threads(cfg.threads)  # also part of reproducibility: the thread count changes float sums
     common.seed_everything(cfg.seed)
     device = common.pick_device(cfg.cuda)
     env = make_continuous_env(cfg.env_id)
     obs_dim, act_dim = int(env.observation_space.shape[0]), int(env.action_space.shape[0])
     low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
-    env.action_space.seed(cfg.seed)
     nets = build(obs_dim, act_dim, low, high, cfg, device)
     actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets
     untrained = copy.deepcopy(actor)  # before.gif is drawn from these weights after training
     first_step = 0
     if cfg.resume:
-        ckpt = load(cfg.resume, nets)
-        first_step = ckpt["global_step"]
-        print(f"resumed {cfg.resume} at step {first_step}; the replay buffer starts empty and is refilled "
-              f"by the loaded actor for start_steps steps", flush=True)
+        first_step = load(cfg.resume, nets)["global_step"]
+        for opt, lr in ((actor_opt, cfg.actor_lr), (critic_opt, cfg.critic_lr)):
+            opt.param_groups[0]["lr"] = lr  # this run's flags win over the saved learning rates
+        print(f"resumed {cfg.resume} at step {first_step}; the replay buffer starts empty and is "
+              f"refilled by the loaded actor for start_steps steps", flush=True)
+    # A resumed run continues with fresh randomness (noise, minibatches, env) instead of
+    # replaying the first run's: it seeds everything with seed + the step it resumes at.
+    run_seed = cfg.seed + first_step
+    common.seed_everything(run_seed)
+    env.action_space.seed(run_seed)
+    try:
+        buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
+    except (MemoryError, RuntimeError) as e:  # e.g. --buffer-size far beyond this machine's memory
+        raise common.UserError(f"cannot allocate a replay buffer of {cfg.buffer_size} transitions: "
+                               f"{str(e).splitlines()[0]}") from None
     run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
     print(f"run folder: {run_dir}  (device: {device})", flush=True)
-    buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
     noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32, device=device)
     low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
@@ -273,7 +295,7 @@ def train(cfg: Config):
     learn_start_time, learn_start_step = None, None
     global_step, interrupted = first_step, False
     warmup_until = first_step + cfg.start_steps
-    obs, _ = env.reset(seed=cfg.seed)
+    obs, _ = env.reset(seed=run_seed)
 
     try:
         for global_step in range(first_step + 1, cfg.total_timesteps + 1):

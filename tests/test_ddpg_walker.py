@@ -20,9 +20,9 @@ def test_replay_buffer_wraps_around_and_keeps_the_newest():
     for i in range(7):
         buf.add(np.full(3, i), np.full(2, -i), float(i), np.full(3, i + 0.5), terminated=False)
     assert buf.count == 5 and buf.ptr == 2
-    stored_rewards = sorted(buf.rows[:, 5].tolist())
-    assert stored_rewards == [2.0, 3.0, 4.0, 5.0, 6.0]  # 0 and 1 were overwritten
-    assert buf.rows[0, 5].item() == 5.0 and buf.rows[1, 5].item() == 6.0
+    assert sorted(buf.reward.tolist()) == [2.0, 3.0, 4.0, 5.0, 6.0]  # 0 and 1 were overwritten
+    assert buf.reward[0].item() == 5.0 and buf.reward[1].item() == 6.0
+    assert buf.obs[0].tolist() == [5.0] * 3 and buf.action[1].tolist() == [-6.0] * 2
 
 
 def test_replay_buffer_sample_shapes_and_fields():
@@ -47,7 +47,7 @@ def test_truncated_is_not_terminal_in_the_buffer():
     buf = ddpg.ReplayBuffer(obs_dim=1, act_dim=1, size=4, device="cpu")
     buf.add(np.zeros(1), np.zeros(1), 1.0, np.ones(1), terminated=True)   # fell over
     buf.add(np.zeros(1), np.zeros(1), 2.0, np.ones(1), terminated=False)  # time limit or mid-episode
-    assert buf.rows[0, -1].item() == 0.0 and buf.rows[1, -1].item() == 1.0
+    assert buf.not_done[:2].tolist() == [0.0, 1.0]
 
 
 def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
@@ -72,7 +72,8 @@ def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
     real_add = ddpg.ReplayBuffer.add
     monkeypatch.setattr(ddpg.ReplayBuffer, "add", lambda self, o, a, r, no, terminated: (
         stored.append(terminated), real_add(self, o, a, r, no, terminated))[1])
-    ddpg.train(ddpg.Config(env_id="InvertedPendulum-v5", total_timesteps=40, start_steps=40, eval_every=10**6,
+    ddpg.train(ddpg.Config(env_id="InvertedPendulum-v5", total_timesteps=40, start_steps=40, batch_size=32,
+                           eval_every=10**6,
                            print_every=10**6, gifs=False, run_dir=str(tmp_path), cuda=False))
     assert len(stored) == 40
     assert [bool(x) for x in stored] == [term for term, _ in flags]
@@ -172,7 +173,7 @@ def test_missing_mujoco_is_one_clear_line(tmp_path):
 
 def test_ctrl_c_saves_model_and_log(tmp_path):
     code, out, err = interrupt("ddpg_walker.py", "--env-id", "InvertedPendulum-v5", "--run-dir", tmp_path,
-                               "--start-steps", 100, "--eval-every", 200, "--eval-episodes", 1, "--print-every", 50,
+                               "--start-steps", 100, "--batch-size", 64, "--eval-every", 200, "--eval-episodes", 1, "--print-every", 50,
                                "--no-cuda", after="evaluation")
     assert code == 130, err
     assert "Traceback" not in err and "interrupted" in out
