@@ -1,4 +1,5 @@
-"""DDPG on MuJoCo Walker2d-v5 (Lillicrap et al. 2016, "Continuous control with deep reinforcement learning").
+"""DDPG on MuJoCo Walker2d-v5 (Lillicrap et al. 2016, "Continuous control with deep
+reinforcement learning").
 
 Read beside tutorial 003: ReplayBuffer, Actor and Critic (the critic takes the
 action at its second layer), target networks updated softly with rate tau,
@@ -10,16 +11,17 @@ and an evaluation every 5000 steps over 10 episodes. The loop, top to bottom:
              truncation is NOT terminal, so its target still bootstraps
     update   one critic and one actor step on a random minibatch, then the
              targets move a fraction tau toward the networks
-    evaluate every eval_every steps: 10 episodes of mu(s) without noise
+    evaluate every eval_every steps: 10 episodes of mu(s) without noise; the run folder
+             keeps model.pt, best.pt (the best evaluation so far), best.gif and curve.png
 
-    python ddpg_walker.py                               # 1M steps: hours on a CPU, less on a GPU
-    python ddpg_walker.py --env-id InvertedPendulum-v5 --total-timesteps 20000 --start-steps 1000
-    python ddpg_walker.py --eval runs/<run>/model.pt --watch
+    python ddpg_walker.py                         # 1M steps: hours on a CPU, less on a GPU
+    python ddpg_walker.py --eval runs/<run>/best.pt --watch   # replay a saved actor
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import time
 from dataclasses import asdict, dataclass
 
@@ -30,27 +32,30 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 import common
+import plots
 
 
 @dataclass
 class Config:
     # --- experiment ---
     env_id: str = "Walker2d-v5"
-    """gymnasium id of an env with Box observations and Box actions (MuJoCo: Walker2d-v5, Hopper-v5, ...)"""
+    """gymnasium id of an env with Box observations and Box actions (Walker2d-v5, Hopper-v5, ...)"""
     seed: int = 0
-    """seeds python, numpy, torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
+    """seeds torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
     total_timesteps: int = 1_000_000
     """env steps to train for (the tutorial and the TD3 paper: 1M)"""
     start_steps: int = 25_000
-    """uniformly random actions for this many steps before the actor acts and learning starts"""
+    """uniformly random actions for this many steps before the actor acts and learning
+    starts (TD3 paper: 25k; at least batch_size)"""
 
     # --- DDPG ---
     expl_noise: float = 0.1
-    """std of the Gaussian exploration noise, as a fraction of the action range's half-width"""
+    """std of the Gaussian exploration noise, as a fraction of the action range's half-width
+    (0.1 .. 0.3)"""
     batch_size: int = 256
-    """transitions per update"""
+    """transitions per update (64 .. 256)"""
     gamma: float = 0.99
-    """discount factor"""
+    """discount factor (0.98 .. 0.995)"""
     tau: float = 0.005
     """target networks move this fraction toward the networks after every update (0.001 .. 0.01)"""
     actor_lr: float = 3e-4
@@ -58,7 +63,7 @@ class Config:
     critic_lr: float = 3e-4
     """Adam step size of the critic (tutorial: 1e-3 with weight decay; TD3's DDPG: 3e-4)"""
     hidden: int = 256
-    """units in each of the two hidden layers (tutorial: 400 and 300; TD3 and CleanRL: 256 and 256)"""
+    """units in each of the two hidden layers (tutorial: 400 and 300; TD3, CleanRL: 256)"""
     buffer_size: int = 1_000_000
     """replay buffer capacity; the oldest transitions are overwritten"""
 
@@ -74,13 +79,17 @@ class Config:
     print_every: int = 1000
     """print a progress line every this many env steps"""
     gifs: bool = True
-    """write before.gif (untrained actor) and after.gif (trained actor) to the run folder"""
+    """write before.gif (untrained actor), after.gif (trained actor) and best.gif (the best
+    evaluation so far, refreshed as it improves) to the run folder"""
+    curves: bool = True
+    """write curve.png (evaluation returns against env steps) at every evaluation"""
     watch: bool = False
-    """after training (or with --eval), play the actor in a window"""
+    """after training (or with --eval), play the actor in a window; needs a display"""
     eval: str | None = None
-    """path of a saved model.pt: skip training, play eval_episodes episodes and print their returns"""
+    """a saved model.pt or best.pt, or a run folder (its model.pt): skip training, play
+    eval_episodes episodes without noise"""
     resume: str | None = None
-    """path of a saved model.pt: continue that run's training from its last saved step"""
+    """a saved model.pt: continue that run's training from its saved step (see the README)"""
     cuda: bool = True
     """train on the GPU when there is one"""
     threads: int = 1
@@ -88,9 +97,10 @@ class Config:
     measures what more threads give on an idle machine"""
 
     def __post_init__(self):
-        for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every", "eval_episodes",
-                     "print_every", "actor_lr", "critic_lr", "threads"):
-            common.check(getattr(self, name) > 0, f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
+        for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every",
+                     "eval_episodes", "print_every", "actor_lr", "critic_lr", "threads"):
+            common.check(getattr(self, name) > 0,
+                         f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
         # The first update samples batch_size transitions: the warm-up must have stored that many.
         common.check(self.start_steps >= self.batch_size,
                      f"--start-steps must be at least --batch-size ({self.batch_size}), "
@@ -185,24 +195,32 @@ def soft_update(target, source, tau):
         p_target.mul_(1 - tau).add_(tau * p)
 
 
+def td_target(reward, not_done, next_q, gamma):
+    """The critic's target y = r + gamma * Q'(s', mu'(s')), with no future after a termination
+    (not_done = 0)  (Lillicrap et al. 2016, Algorithm 1)."""
+    return reward + gamma * not_done * next_q
+
+
+def compute_loss_actor(actor, critic, obs):
+    """Deterministic policy gradient: grad J = mean grad_a Q(s, a)|a=mu(s) * grad mu(s)
+    (Lillicrap et al. 2016, Algorithm 1). The actor ascends Q, so its loss is -Q."""
+    return -critic(obs, actor(obs)).mean()
+
+
 def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
     """One critic step and one actor step on a minibatch, then the soft target update."""
     obs, action, reward, next_obs, not_done = batch
-    # Critic target y = r + gamma * Q'(s', mu'(s')), with no future at a termination
-    # (Lillicrap et al. 2016, Algorithm 1). Targets are constants: no gradient flows into them.
-    with torch.no_grad():
-        y = reward + cfg.gamma * not_done * critic_target(next_obs, actor_target(next_obs))
+    with torch.no_grad():  # targets are constants: no gradient flows into them
+        y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
     # L = mean (y - Q(s, a))^2  (Lillicrap et al. 2016, Algorithm 1)
     critic_loss = F.mse_loss(critic(obs, action), y)
     critic_opt.zero_grad()
     critic_loss.backward()
     critic_opt.step()
 
-    # Deterministic policy gradient: grad J = mean grad_a Q(s, a)|a=mu(s) * grad mu(s)
-    # (Lillicrap et al. 2016, Algorithm 1): ascend Q, so minimize -Q. `inputs=` keeps
-    # backward from computing critic gradients that would be thrown away.
-    actor_loss = -critic(obs, actor(obs)).mean()
+    actor_loss = compute_loss_actor(actor, critic, obs)
     actor_opt.zero_grad()
+    # inputs=: gradients for the actor only; the critic's would be thrown away.
     actor_loss.backward(inputs=list(actor.parameters()))
     actor_opt.step()
 
@@ -224,9 +242,16 @@ def deterministic(actor, device):
     return act
 
 
-def make_continuous_env(env_id, **kwargs):
+# GIFs and --watch look through the model's "track" camera, which follows the walker
+# (gymnasium's default free camera stays put, and a walking agent leaves the picture).
+# Models without such a camera (InvertedPendulum) keep the default view.
+CAMERA = dict(camera_name="track")
+
+
+def make_continuous_env(env_id):
     """The env, or a UserError if its actions are not a Box."""
-    env = common.make_env(env_id, **kwargs)
+    with common.env_errors(env_id):
+        env = gym.make(env_id)
     if not isinstance(env.action_space, gym.spaces.Box):
         env.close()
         raise common.UserError(f"{env_id} has a {type(env.action_space).__name__} action space; "
@@ -238,11 +263,17 @@ def build(obs_dim, act_dim, low, high, cfg, device):
     """Actor, critic, their targets and optimizers."""
     actor = Actor(obs_dim, act_dim, cfg.hidden, low, high).to(device)
     critic = Critic(obs_dim, act_dim, cfg.hidden).to(device)
-    actor_target, critic_target = copy.deepcopy(actor), copy.deepcopy(critic)  # start equal, then lag behind
-    # fused: one kernel per step for all parameters, not a handful of ops per tensor.
+    # The targets start equal to the networks, then lag behind them.
+    actor_target, critic_target = copy.deepcopy(actor), copy.deepcopy(critic)
+    # fused=True: torch's one-kernel Adam step for all parameters (a standard option).
     actor_opt = torch.optim.Adam(actor.parameters(), lr=cfg.actor_lr, fused=True)
     critic_opt = torch.optim.Adam(critic.parameters(), lr=cfg.critic_lr, fused=True)
     return actor, critic, actor_target, critic_target, actor_opt, critic_opt
+
+
+def clock(seconds):
+    """1234.5 -> '0:20:34'."""
+    return time.strftime("%H:%M:%S", time.gmtime(seconds)).lstrip("0").lstrip(":") or "0"
 
 
 def train(cfg: Config):
@@ -250,9 +281,9 @@ def train(cfg: Config):
     (step, mean, std)), episode_returns, steps_per_second (learning phase) and interrupted."""
     start_time = time.time()
     # --- seeding and setup ---
-    torch.set_num_threads(cfg.threads)  # also part of reproducibility: the thread count changes float sums
-    common.seed_everything(cfg.seed)
-    device = common.pick_device(cfg.cuda)
+    torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
+    torch.manual_seed(cfg.seed)  # the networks' init
+    device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
     env = make_continuous_env(cfg.env_id)
     obs_dim, act_dim = int(env.observation_space.shape[0]), int(env.action_space.shape[0])
     low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
@@ -269,7 +300,7 @@ def train(cfg: Config):
     # A resumed run continues with fresh randomness (noise, minibatches, env) instead of
     # replaying the first run's: it seeds everything with seed + the step it resumes at.
     run_seed = cfg.seed + first_step
-    common.seed_everything(run_seed)
+    torch.manual_seed(run_seed)
     env.action_space.seed(run_seed)
     try:
         buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
@@ -278,20 +309,22 @@ def train(cfg: Config):
                                f"{str(e).splitlines()[0]}") from None
     run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
     print(f"run folder: {run_dir}  (device: {device})", flush=True)
-    noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32, device=device)
+    noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32,
+                                device=device)
     low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
 
-    def save():
-        common.save_checkpoint(dict(actor=actor.state_dict(), critic=critic.state_dict(),
-                                    actor_target=actor_target.state_dict(), critic_target=critic_target.state_dict(),
-                                    actor_opt=actor_opt.state_dict(), critic_opt=critic_opt.state_dict(),
-                                    config=asdict(cfg), obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(),
-                                    high=high.tolist(), global_step=global_step), run_dir / "model.pt")
+    def save(name):
+        common.save_checkpoint(dict(
+            actor=actor.state_dict(), critic=critic.state_dict(),
+            actor_target=actor_target.state_dict(), critic_target=critic_target.state_dict(),
+            actor_opt=actor_opt.state_dict(), critic_opt=critic_opt.state_dict(),
+            config=asdict(cfg), obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(),
+            high=high.tolist(), global_step=global_step), run_dir / name)
 
     # --- bookkeeping ---
     episode_returns, evaluations = [], []
-    ep_return, losses = 0.0, None
+    ep_return, losses, best = 0.0, None, -float("inf")
     learn_start_time, learn_start_step = None, None
     global_step, interrupted = first_step, False
     warmup_until = first_step + cfg.start_steps
@@ -301,14 +334,15 @@ def train(cfg: Config):
         for global_step in range(first_step + 1, cfg.total_timesteps + 1):
             # --- act ---
             if global_step <= warmup_until and not cfg.resume:
-                action = env.action_space.sample()  # random warm-up fills the buffer with diverse data
+                action = env.action_space.sample()  # a random warm-up fills the buffer widely
             else:
                 with torch.no_grad():
                     a = actor(torch.as_tensor(obs, dtype=torch.float32, device=device))
-                    a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian exploration noise
+                    a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian noise
                     action = torch.clamp(a, low_t, high_t).cpu().numpy()
             next_obs, reward, terminated, truncated, _ = env.step(action)
-            buffer.add(obs, action, reward, next_obs, terminated)  # terminated, not truncated: see ReplayBuffer.add
+            # Stored with terminated, not truncated: see ReplayBuffer.add.
+            buffer.add(obs, action, reward, next_obs, terminated)
             # obs = next_obs: the transition above is stored, the next action starts from here.
             obs = next_obs
             ep_return += float(reward)
@@ -321,57 +355,73 @@ def train(cfg: Config):
             if global_step > warmup_until:
                 if learn_start_time is None:
                     learn_start_time, learn_start_step = time.time(), global_step
-                losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt,
-                                     buffer.sample(cfg.batch_size), cfg)
+                losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt,
+                                     critic_opt, buffer.sample(cfg.batch_size), cfg)
 
             # --- logging ---
             if global_step % cfg.print_every == 0:
                 elapsed = time.time() - start_time
                 if learn_start_time is not None and global_step > learn_start_step:
                     rate = (global_step - learn_start_step) / (time.time() - learn_start_time)
-                    eta = (cfg.total_timesteps - global_step) / rate
-                    speed = f"{rate:5.0f} steps/s  eta {common.format_time(eta)}"
+                    left = (cfg.total_timesteps - global_step) / rate
+                    speed = f"{rate:5.0f} steps/s  rest of the budget {clock(left)}"
                 else:
                     speed = "warm-up (random actions)"
                 recent = f"{np.mean(episode_returns[-10:]):8.1f}" if episode_returns else "     n/a"
-                loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
-                             if losses is not None else "")
+                loss_text = (f"  critic_loss {losses[0].item():8.3f}  "
+                             f"actor_loss {losses[1].item():8.2f}" if losses is not None else "")
                 print(f"step {global_step:>8}  {speed}  return(10) {recent}{loss_text}  "
-                      f"{common.format_time(elapsed)}", flush=True)
+                      f"{clock(elapsed)}", flush=True)
+            # --- evaluation, checkpoints, curve; the best model so far and its GIF ---
             if global_step % cfg.eval_every == 0:
-                returns = common.evaluate(cfg.env_id, deterministic(actor, device), cfg.eval_episodes,
-                                          cfg.eval_seed)
+                returns = common.evaluate(cfg.env_id, deterministic(actor, device),
+                                          cfg.eval_episodes, cfg.eval_seed)
                 evaluations.append((global_step, float(np.mean(returns)), float(np.std(returns))))
+                recent = float(np.mean(episode_returns[-10:])) if episode_returns else float("nan")
                 common.append_csv(run_dir / "evaluations.csv", dict(
-                    global_step=global_step, eval_mean=evaluations[-1][1], eval_std=evaluations[-1][2],
-                    episodes=len(episode_returns),
-                    train_return_mean10=float(np.mean(episode_returns[-10:])) if episode_returns else float("nan")))
-                print(f"evaluation at step {global_step}: {evaluations[-1][1]:.1f} +- {evaluations[-1][2]:.1f} "
-                      f"over {cfg.eval_episodes} episodes", flush=True)
-                save()  # atomic: a crash never leaves half a model.pt
+                    global_step=global_step, eval_mean=evaluations[-1][1],
+                    eval_std=evaluations[-1][2], episodes=len(episode_returns),
+                    train_return_mean10=recent))
+                print(f"evaluation at step {global_step}: {evaluations[-1][1]:.1f} +- "
+                      f"{evaluations[-1][2]:.1f} over {cfg.eval_episodes} episodes", flush=True)
+                save("model.pt")  # atomic: a crash never leaves half a model.pt
+                if evaluations[-1][1] > best:
+                    best = evaluations[-1][1]
+                    save("best.pt")
+                    if cfg.gifs:
+                        common.record_gif(cfg.env_id, deterministic(actor, device),
+                                          run_dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
+                if cfg.curves:
+                    plots.draw_run(run_dir)  # rewritten at every evaluation: open it any time
     except KeyboardInterrupt:
         interrupted = True
         print("\ninterrupted: saving the model and the logs", flush=True)
     finally:
         env.close()
-        save()
+        save("model.pt")
 
     learned = global_step - (learn_start_step or global_step)
-    rate = learned / (time.time() - learn_start_time) if learn_start_time and learned > 0 else float("nan")
-    result = dict(run_dir=run_dir, global_step=global_step, evaluations=evaluations, episode_returns=episode_returns,
-                  steps_per_second=rate, interrupted=interrupted)
-    print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor update per step, "
-          f"evaluations included); model: {run_dir / 'model.pt'}", flush=True)
+    rate = learned / (time.time() - learn_start_time) if learned > 0 else float("nan")
+    result = dict(run_dir=run_dir, global_step=global_step, evaluations=evaluations,
+                  episode_returns=episode_returns, steps_per_second=rate, interrupted=interrupted)
+    print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor "
+          f"update per step, evaluations included); model: {run_dir / 'model.pt'}", flush=True)
     if interrupted:
         return result
     if cfg.gifs:
-        common.before_after_gifs(cfg.env_id, run_dir, deterministic(untrained, device), deterministic(actor, device),
-                                 cfg.eval_seed, max_frames=250, every=4, scale=2)  # 1000 steps -> 250 frames
+        for name, net in (("before.gif", untrained), ("after.gif", actor)):
+            ret = common.record_gif(cfg.env_id, deterministic(net, device), run_dir / name,
+                                    cfg.eval_seed, **GIF, **CAMERA)
+            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
     return result
 
 
+# 1000 steps -> every 4th frame, 250 frames, at half size: a GIF of a few MB.
+GIF = dict(max_frames=250, every=4, scale=2)
+
+
 def load(path, nets):
-    """Load a checkpoint into (actor, critic, actor_target, critic_target, actor_opt, critic_opt)."""
+    """Load a checkpoint into the six (actor, critic, their targets, their optimizers)."""
     keys = ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic_opt")
     ckpt = common.load_checkpoint(path, required=keys + ("global_step",))
     for key, obj in zip(keys, nets):
@@ -380,21 +430,36 @@ def load(path, nets):
 
 
 def play(cfg: Config):
-    """--eval PATH: load a saved actor and play cfg.eval_episodes episodes without noise."""
-    ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low", "high", "config"))
-    actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"], np.array(ckpt["low"]),
-                  np.array(ckpt["high"]))
+    """--eval PATH (model.pt, best.pt or a run folder): play cfg.eval_episodes episodes
+    of the saved actor without noise."""
+    ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low",
+                                                      "high", "config"))
+    actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"],
+                  np.array(ckpt["low"]), np.array(ckpt["high"]))
     common.load_weights(actor, ckpt["actor"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
-    returns = common.evaluate(env_id, deterministic(actor, torch.device("cpu")), cfg.eval_episodes, cfg.eval_seed,
-                              render_mode="human" if cfg.watch else None)
-    print(f"{env_id}, {cfg.eval}: returns {[round(r, 1) for r in returns]}, mean {np.mean(returns):.1f}", flush=True)
+    print(f"playing {cfg.eval_episodes} episodes of {env_id} with {cfg.eval}"
+          + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
+    returns = common.evaluate(env_id, deterministic(actor, torch.device("cpu")), cfg.eval_episodes,
+                              cfg.eval_seed, render_mode="human" if cfg.watch else None,
+                              log=cfg.watch, **(CAMERA if cfg.watch else {}))
+    print(f"{env_id}, {cfg.eval}: returns {[round(r, 1) for r in returns]}, "
+          f"mean {np.mean(returns):.1f}", flush=True)
     return returns
 
 
 def main(argv=None):
-    """Parse the flags into a Config, then --eval, or train (and --watch); see common.main."""
-    common.main(Config, train, play, argv, description=__doc__.split("\n")[0])
+    """python ddpg_walker.py [flags]: train (then --watch), or --eval a saved model."""
+    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
+    with common.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        if cfg.eval:
+            play(cfg)
+            return
+        result = train(cfg)  # on Ctrl-C it saves the model and logs, says so, and returns
+        if result["interrupted"]:
+            raise SystemExit(130)
+        if cfg.watch:
+            play(dataclasses.replace(cfg, eval=str(result["run_dir"])))
 
 
 if __name__ == "__main__":

@@ -13,14 +13,15 @@ and the beta update. The loop, top to bottom:
     beta     halve or double beta, from the mean KL of the update
     log      one progress.csv row per update; a progress line now and then
 
-    python ppo_kl_cartpole.py                  # train until solved, ~3 s on a laptop CPU
+    python ppo_kl_cartpole.py                  # train until solved, a few seconds on a CPU
     python ppo_kl_cartpole.py --help           # every hyperparameter, with its meaning
-    python ppo_kl_cartpole.py --eval runs/<run>/model.pt --watch   # replay in a window
+    python ppo_kl_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 import time
 from collections import deque
 from dataclasses import asdict, dataclass
@@ -28,8 +29,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 import torch.nn as nn
+from torch.distributions import Categorical, kl_divergence
 
 import common
+import plots
 
 
 @dataclass
@@ -38,55 +41,55 @@ class Config:
     env_id: str = "CartPole-v1"
     """gymnasium id of an env with a Box observation and Discrete actions"""
     seed: int = 0
-    """seeds python, numpy, torch and the envs: same seed, same machine => same progress.csv"""
+    """seeds torch and the envs: same seed, same machine => same progress.csv"""
     total_timesteps: int = 100_000
-    """budget of env steps (all envs together); training usually stops long before, once solved"""
+    """budget of env steps (all envs together); training usually stops long before, when solved"""
     stop_when_solved: bool = True
-    """stop as soon as the mean return of the last 20 finished episodes reaches the solved return"""
+    """stop once the mean return of the last 20 finished episodes reaches the solved return"""
     solved_return: float | None = None
-    """the return that counts as solved; none = the env's reward_threshold (475 for CartPole-v1)"""
+    """the return that counts as solved; none = the env's reward_threshold (CartPole-v1: 475)"""
 
     # --- collection ---
     num_envs: int = 8
-    """parallel envs in the vector env; more envs = more diverse batches, fewer updates per env step"""
+    """parallel envs; more = more diverse batches, fewer updates per env step (1 .. 64)"""
     num_steps: int = 32
-    """steps per env per rollout; the batch is num_envs * num_steps transitions (here 256)"""
+    """steps per env per rollout; the batch is num_envs * num_steps transitions (32 .. 2048)"""
 
     # --- PPO ---
     learning_rate: float = 4e-3
-    """Adam step size for both networks (PPO: 3e-4 .. 3e-3 is usual; CartPole takes more)"""
+    """Adam step size for both networks (PPO usually 3e-4 .. 3e-3; CartPole takes more)"""
     anneal_lr: bool = True
     """decay the learning rate linearly to 0 over total_timesteps"""
     gamma: float = 0.99
-    """discount factor; 0.98 .. 0.999. 0.99 looks ~100 steps ahead"""
+    """discount factor (0.98 .. 0.999); 0.99 looks about 100 steps ahead"""
     reward_scale: float = 0.05
-    """rewards are multiplied by this for learning (returns are logged unscaled): discounted returns near
-    100 become near 5, targets V reaches within a few Adam steps, so the advantages are useful sooner
-    (1.0 = off; PPO-clip then took 40% more steps to solve, median of seeds 0-29)"""
+    """rewards are multiplied by this for learning (logged returns are not): V's targets
+    stay near 1, so the critic fits them within a few steps (1 = off; 0.01 .. 1)"""
     lam: float = 0.95
-    """GAE lambda: 0 = one-step TD advantages (low variance), 1 = Monte Carlo (no bias); usually 0.8 .. 0.97"""
+    """GAE lambda: 0 = one-step TD advantages (low variance), 1 = Monte Carlo (no bias);
+    usually 0.9 .. 0.97"""
     update_epochs: int = 10
-    """passes over each batch (tutorial 000 uses 10)"""
+    """passes over each batch (tutorial 000: 10; 3 .. 30)"""
     num_minibatches: int = 4
-    """minibatches per epoch; minibatch size = batch / num_minibatches"""
+    """minibatches per epoch; minibatch size = batch / num_minibatches (1 .. 32)"""
     norm_adv: bool = True
     """normalize advantages to mean 0, std 1 within each minibatch"""
     d_targ: float = 0.01
     """target KL(pi_old || pi) per update; the paper tries 0.003, 0.01 and 0.03"""
     beta_init: float = 1.0
-    """initial KL penalty coefficient beta; the rule adapts it within a few updates (paper: "not important")"""
+    """initial KL penalty coefficient beta; the rule adapts it within a few updates"""
     kl_tolerance: float = 1.5
     """beta changes only when the KL leaves [d_targ / 1.5, d_targ * 1.5] (the paper's 1.5)"""
     beta_factor: float = 2.0
     """beta is halved or doubled (the paper's 2)"""
     ent_coef: float = 0.0
-    """entropy bonus weight c2 (eq. 9); 0 .. 0.01. CartPole explores enough without it"""
+    """entropy bonus weight c2 (eq. 9; 0 .. 0.01). CartPole explores enough without it"""
     vf_coef: float = 0.5
-    """value loss weight c1 (eq. 9)"""
+    """value loss weight c1 (eq. 9; 0.5 .. 1)"""
     max_grad_norm: float = 0.5
-    """clip the global gradient norm of both networks to this"""
+    """clip the global gradient norm of both networks to this (0.5 .. 10; 0 = no clipping)"""
     hidden: int = 64
-    """units in each of the two hidden layers of both networks"""
+    """units in each of the two hidden layers of both networks (32 .. 256)"""
 
     # --- output ---
     run_dir: str = "runs"
@@ -95,32 +98,40 @@ class Config:
     """print a progress line every this many updates"""
     gifs: bool = True
     """write before.gif (untrained policy) and after.gif (trained policy) to the run folder"""
+    curves: bool = True
+    """draw curve.png (returns and the update's diagnostics against env steps) after training"""
     eval_episodes: int = 10
     """greedy episodes played after training (and by --eval)"""
     eval_seed: int = 10_000
     """seed of the evaluation env, kept apart from the training seeds"""
     watch: bool = False
-    """after training (or with --eval), play the policy in a pygame window"""
+    """after training (or with --eval), play the policy in a window; needs a display"""
     eval: str | None = None
-    """path of a saved model.pt: skip training, play eval_episodes greedy episodes and print their returns"""
+    """a saved model.pt or its run folder: skip training, play eval_episodes greedy episodes"""
     threads: int = 1
-    """torch CPU threads. 1 is fastest here: for networks this small, waking a second thread for every op
-    costs more than it saves (5x slower with 2 threads while another program is busy)"""
+    """torch CPU threads. 1 is fastest for networks this small (see the README)"""
     cuda: bool = False
     """train on the GPU if there is one (CartPole's tiny networks are faster on the CPU)"""
 
     def __post_init__(self):
-        for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches", "hidden",
-                     "print_every", "eval_episodes", "threads", "learning_rate", "reward_scale", "d_targ", "beta_init"):
-            common.check(getattr(self, name) > 0, f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
+        for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches",
+                     "hidden", "print_every", "eval_episodes", "threads", "learning_rate",
+                     "reward_scale", "d_targ", "beta_init"):
+            common.check(getattr(self, name) > 0,
+                         f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
         for name in ("ent_coef", "vf_coef", "max_grad_norm"):
-            common.check(getattr(self, name) >= 0, f"--{name.replace('_', '-')} must be >= 0, got {getattr(self, name)}")
+            common.check(getattr(self, name) >= 0,
+                         f"--{name.replace('_', '-')} must be >= 0, got {getattr(self, name)}")
         common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
         common.check(0 <= self.lam <= 1, f"--lam must be in [0, 1], got {self.lam}")
         common.check(self.kl_tolerance > 1, f"--kl-tolerance must be > 1, got {self.kl_tolerance}")
         common.check(self.beta_factor > 1, f"--beta-factor must be > 1, got {self.beta_factor}")
-        common.check(self.num_envs * self.num_steps >= self.num_minibatches,
-                     f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({self.num_envs * self.num_steps})")
+        batch = self.num_envs * self.num_steps
+        common.check(self.num_minibatches <= batch,
+                     f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({batch})")
+        common.check(self.total_timesteps >= batch,
+                     f"--total-timesteps ({self.total_timesteps}) is less than one rollout "
+                     f"(num_envs x num_steps = {batch}): nothing would be learned")
 
 
 # =============================================================================
@@ -163,7 +174,7 @@ class ValueNetwork(nn.Module):
         )
 
     def forward(self, obs):
-        return self.net(obs).squeeze(-1)  # (B, 1) -> (B,): a stray (B, 1) would broadcast against (B,) targets
+        return self.net(obs).squeeze(-1)  # (B,): a stray (B, 1) would broadcast against targets
 
 
 # =============================================================================
@@ -184,8 +195,7 @@ class RolloutBuffer:
         self.rewards = np.zeros((T, N), dtype=np.float32)
         self.terminated = np.zeros((T, N), dtype=bool)
         self.truncated = np.zeros((T, N), dtype=bool)
-        # False where the step was a vector-env autoreset step (see the loop).
-        self.valid = np.ones((T, N), dtype=bool)
+        self.valid = np.ones((T, N), dtype=bool)  # False at a vector-env autoreset step
 
     def store(self, t, obs, action, reward, terminated, truncated, valid):
         self.obs[t], self.actions[t], self.rewards[t] = obs, action, reward
@@ -196,23 +206,16 @@ class RolloutBuffer:
         return {name: torch.as_tensor(array, device=device) for name, array in vars(self).items()}
 
 
-def exact_kl(log_probs_old, log_probs):
-    """KL(pi_old || pi) per state, exactly: sum_a pi_old(a|s) * (log pi_old(a|s) - log pi(a|s)).
-
-    Both arguments are log-probabilities of every action, shaped (B, n_actions);
-    with few discrete actions the sum is cheap, so no sample estimate is needed.
-    """
-    return (log_probs_old.exp() * (log_probs_old - log_probs)).sum(-1)  # (B,)
-
-
-def compute_loss_pi(policy, obs, act, adv, logp_old, log_probs_old, beta):
-    """KL-penalized surrogate loss. Returns (loss_pi, log pi(.|s))."""
-    log_probs = torch.log_softmax(policy(obs), dim=-1)  # log pi(.|s), (B, n_actions)
-    logp = log_probs.gather(1, act.unsqueeze(1)).squeeze(1)  # log pi(a|s) of the taken actions, (B,)
+def compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta):
+    """KL-penalized surrogate loss. Returns (loss_pi, entropy of pi, info with kl)."""
+    dist = Categorical(logits=policy(obs))  # pi(.|s)
+    logp = dist.log_prob(act)  # log pi(a|s) of the taken actions, (B,)
     ratio = torch.exp(logp - logp_old)  # r_t = pi(a|s) / pi_old(a|s)
-    # L_KLPEN = E[r*A - beta * KL(pi_old(.|s), pi(.|s))]  (Schulman et al. 2017, eq. 8); we minimize -L_KLPEN.
-    loss_pi = -(ratio * adv).mean() + beta * exact_kl(log_probs_old, log_probs).mean()
-    return loss_pi, log_probs
+    # KL(pi_old(.|s) || pi(.|s)), exact: with few discrete actions no sample estimate is needed.
+    kl = kl_divergence(Categorical(logits=logits_old), dist).mean()
+    # L_KLPEN = E[r*A - beta * KL(pi_old(.|s), pi(.|s))]  (Schulman et al. 2017, eq. 8)
+    loss_pi = -(ratio * adv).mean() + beta * kl
+    return loss_pi, dist.entropy().mean(), dict(kl=kl.detach())
 
 
 def adapt_beta(beta, d, cfg):
@@ -233,49 +236,39 @@ def compute_loss_v(value_net, obs, ret):
     return 0.5 * ((value_net(obs) - ret) ** 2).mean()
 
 
-@torch.no_grad()
-def policy_shift(policy, obs, log_probs_old):
-    """How far pi has moved from pi_old on the whole batch: the mean exact KL (the paper's d), and the entropy."""
-    log_probs = torch.log_softmax(policy(obs), dim=-1)
-    return dict(kl=exact_kl(log_probs_old, log_probs).mean().item(),
-                entropy=-(log_probs.exp() * log_probs).sum(-1).mean().item())
-
-
-def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_log_probs_old, b_adv, b_ret, beta, cfg):
-    """update_epochs passes of shuffled minibatches over one batch. Returns stats for the log.
-
-    b_log_probs_old is pi_old in full, (B, n_actions): every action's log-probability, for the exact KL.
-    """
-    params = list(policy.parameters()) + list(value_net.parameters())
-    batch_size = b_obs.shape[0]
-    mb_size = max(batch_size // cfg.num_minibatches, 1)
-    losses_pi, losses_v = [], []
+def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_logits_old, b_adv, b_ret,
+               beta, cfg):
+    """update_epochs passes of shuffled minibatches over one batch.
+    Returns the update's stats for the log, averaged over its minibatch steps, and d,
+    the mean KL(pi_old || pi) over the batch after the update (for the beta rule).
+    b_logits_old is pi_old in full, (B, n_actions), for the exact KL."""
+    params = [*policy.parameters(), *value_net.parameters()]
+    stats = []
     for epoch in range(cfg.update_epochs):
-        order = torch.randperm(batch_size, device=b_obs.device)
-        for start in range(0, batch_size - mb_size + 1, mb_size):
-            mb = order[start:start + mb_size]  # this minibatch's rows of the batch
+        # num_minibatches random minibatches that together hold every transition once.
+        for mb in torch.randperm(len(b_obs), device=b_obs.device).tensor_split(cfg.num_minibatches):
             mb_obs, mb_adv = b_obs[mb], b_adv[mb]
             if cfg.norm_adv:
                 mb_adv = (mb_adv - mb_adv.mean()) / (mb_adv.std(unbiased=False) + 1e-8)
-            loss_pi, log_probs = compute_loss_pi(policy, mb_obs, b_act[mb], mb_adv, b_logp[mb],
-                                                 b_log_probs_old[mb], beta)
+            loss_pi, entropy, info = compute_loss_pi(policy, mb_obs, b_act[mb], mb_adv, b_logp[mb],
+                                                     b_logits_old[mb], beta)
             loss_v = compute_loss_v(value_net, mb_obs, b_ret[mb])
-            # L = L_KLPEN - c1 * L_VF + c2 * S[pi], maximized  (Schulman et al. 2017, eq. 9 with L_KLPEN for L_CLIP).
-            # The networks are separate, so c1 only matters through the shared gradient clip.
-            loss = loss_pi + cfg.vf_coef * loss_v
-            if cfg.ent_coef > 0:  # skipped at 0: "- 0 * entropy" would still cost a backward pass
-                entropy = -(log_probs.exp() * log_probs).sum(-1).mean()  # S = -sum_a pi(a|s) log pi(a|s)
-                loss = loss - cfg.ent_coef * entropy
+            # L = L_KLPEN - c1 * L_VF + c2 * S[pi], maximized  (Schulman et al. 2017, eq. 9,
+            # with L_KLPEN for L_CLIP). The networks are separate, so c1 only matters through
+            # the shared gradient clip.
+            loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
 
             optimizer.zero_grad()
             loss.backward()
-            nn.utils.clip_grad_norm_(params, cfg.max_grad_norm, foreach=True)
+            if cfg.max_grad_norm > 0:
+                nn.utils.clip_grad_norm_(params, cfg.max_grad_norm)
             optimizer.step()
-            losses_pi.append(loss_pi.detach())
-            losses_v.append(loss_v.detach())
-    shift = policy_shift(policy, b_obs, b_log_probs_old)  # d, how far this update moved pi
-    return dict(loss_pi=torch.stack(losses_pi).mean().item(), loss_v=torch.stack(losses_v).mean().item(),
-                epochs=epoch + 1, **shift)
+            stats.append(torch.stack([loss_pi.detach(), loss_v.detach(), entropy.detach(),
+                                      info["kl"]]))
+    means = torch.stack(stats).mean(0).tolist()
+    with torch.no_grad():  # d: how far this whole update moved pi, on the whole batch
+        d = kl_divergence(Categorical(logits=b_logits_old), Categorical(logits=policy(b_obs)))
+    return dict(zip(("loss_pi", "loss_v", "entropy", "kl_minibatch"), means), kl=d.mean().item())
 
 
 # =============================================================================
@@ -293,44 +286,51 @@ def greedy(policy, device):
 
 def train(cfg: Config):
     """Train PPO-penalty with `cfg`. Returns a dict: run_dir, solved, global_step,
-    solved_step (or None), episode_returns (all finished training episodes) and
-    eval_returns (greedy episodes after training)."""
+    solved_step (or None), episode_returns (all finished training episodes),
+    eval_returns (greedy episodes after training) and interrupted."""
     start_time = time.time()
     # --- seeding and setup ---
-    common.seed_everything(cfg.seed)
-    torch.set_num_threads(cfg.threads)  # also part of reproducibility: the thread count changes float sums
-    device = common.pick_device(cfg.cuda)
-    envs, next_obs = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed)
-    common.require_discrete(cfg.env_id, envs.single_action_space)
-    threshold = common.solve_threshold(cfg.env_id, cfg.solved_return)
-    obs_dim, n_actions = int(envs.single_observation_space.shape[0]), int(envs.single_action_space.n)
+    torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
+    torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
+    device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
+    envs, next_obs, threshold = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed,
+                                                    cfg.solved_return)
+    obs_dim = int(envs.single_observation_space.shape[0])
+    n_actions = int(envs.single_action_space.n)
+    T, N = cfg.num_steps, cfg.num_envs
+    with common.env_errors(cfg.env_id):  # too little memory for the buffer: one clear line
+        buffer = RolloutBuffer(T, N, obs_dim)
     run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
     print(f"run folder: {run_dir}", flush=True)
 
     policy = PolicyNetwork(obs_dim, n_actions, cfg.hidden).to(device)
     value_net = ValueNetwork(obs_dim, cfg.hidden).to(device)
     untrained = copy.deepcopy(policy)  # before.gif is drawn from these weights after training
-    # common.Adam is torch.optim.Adam's update without its 1-second first-use import (see its docstring).
-    optimizer = common.Adam([*policy.parameters(), *value_net.parameters()], lr=cfg.learning_rate, eps=1e-5)
-    T, N = cfg.num_steps, cfg.num_envs
-    buffer = RolloutBuffer(T, N, obs_dim)
+    optimizer = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
+                                 lr=cfg.learning_rate, eps=1e-5)
     num_updates = cfg.total_timesteps // (T * N)
 
     # --- episode bookkeeping ---
-    ep_return = np.zeros(N)
-    episode_returns = []  # every finished training episode, in order
+    episode_returns, episode_steps = [], []  # every finished training episode, in order
     last20 = deque(maxlen=20)
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset
     # step: its action is ignored, its reward is 0 and the obs it returns is
     # the first of the new episode. `autoreset` marks envs whose next step is one.
     autoreset = np.zeros(N, dtype=bool)
-    global_step, solved_step, update, interrupted = 0, None, 0, False
+    global_step, solved_step, update, interrupted, stats = 0, None, 0, False, {}
     beta = cfg.beta_init
+
+    def log(stats):  # one progress.csv row: the state of training now
+        common.append_csv(run_dir / "progress.csv", dict(
+            global_step=global_step, episodes=len(episode_returns),
+            return_mean20=float(np.mean(last20)) if last20 else float("nan"),
+            lr=optimizer.param_groups[0]["lr"], **stats))
 
     try:
         for update in range(1, num_updates + 1):
-            if cfg.anneal_lr:
-                optimizer.param_groups[0]["lr"] = cfg.learning_rate * (1 - (update - 1) / num_updates)
+            if cfg.anneal_lr:  # lr_k = lr * (1 - (k - 1) / K): from lr at the first update toward 0
+                frac = 1 - (update - 1) / num_updates
+                optimizer.param_groups[0]["lr"] = cfg.learning_rate * frac
 
             # --- collect: T steps of N envs with the current policy (pi_old) ---
             for t in range(T):
@@ -338,94 +338,99 @@ def train(cfg: Config):
                 # value) belong to obs; next_obs is only where they led.
                 obs = next_obs
                 with torch.no_grad():
-                    probs = torch.softmax(policy(torch.as_tensor(obs, dtype=torch.float32, device=device)), dim=-1)
-                # a ~ pi(.|s): what Categorical(probs).sample() does, without building a distribution
-                # object at every step (its log-probs are computed for the whole batch below).
-                action = torch.multinomial(probs, 1).squeeze(1).cpu().numpy()  # (N,)
-                next_obs, reward, terminated, truncated, _ = envs.step(action)
+                    logits = policy(torch.as_tensor(obs, dtype=torch.float32, device=device))
+                action = Categorical(logits=logits).sample().cpu().numpy()  # a ~ pi(.|s), (N,)
+                next_obs, reward, terminated, truncated, info = envs.step(action)
                 global_step += N
-                buffer.store(t, obs, action, cfg.reward_scale * reward, terminated, truncated, valid=~autoreset)
-
-                ep_return += reward
-                done = terminated | truncated
-                for i in np.flatnonzero(done):
-                    episode_returns.append(ep_return[i])
-                    last20.append(ep_return[i])
-                ep_return[done | autoreset] = 0.0  # the reset step's reward (0) starts no episode
-                autoreset = done
-                if solved_step is None and len(last20) == last20.maxlen and np.mean(last20) >= threshold:
+                buffer.store(t, obs, action, cfg.reward_scale * reward, terminated, truncated,
+                             valid=~autoreset)
+                autoreset = terminated | truncated
+                if "episode" in info:  # episodes that ended at this step (RecordEpisodeStatistics)
+                    for ep_return in info["episode"]["r"][info["_episode"]]:
+                        episode_returns.append(float(ep_return))
+                        episode_steps.append(global_step)
+                        last20.append(float(ep_return))
+                if solved_step is None and len(last20) == 20 and np.mean(last20) >= threshold:
                     solved_step = global_step
-                    print(f"solved: mean return of the last 20 episodes {np.mean(last20):.1f} >= {threshold:g} "
-                          f"at step {global_step} (episode {len(episode_returns)}) after {time.time() - start_time:.1f}s",
-                          flush=True)
+                    print(f"solved: mean return of the last 20 episodes {np.mean(last20):.1f} >= "
+                          f"{threshold:g} at step {global_step} (episode {len(episode_returns)}) "
+                          f"after {time.time() - start_time:.1f}s", flush=True)
                     if cfg.stop_when_solved:
                         break
             if solved_step is not None and cfg.stop_when_solved:
-                break  # done: the partial rollout is not used for an update
+                # The last row shows where training ended; the partial rollout trains nothing.
+                log(dict.fromkeys(stats, float("nan")))
+                break
+
             # --- pi_old and V of the whole rollout in one batch, then advantages ---
             rollout = buffer.get_batch(device)  # (T, N, ...) tensors
             with torch.no_grad():
-                # log pi_old(a|s): the policy has not changed since it chose these actions.
-                log_probs = torch.log_softmax(policy(rollout["obs"]), dim=-1)  # (T, N, n_actions)
-                logp_old = log_probs.gather(-1, rollout["actions"].unsqueeze(-1)).squeeze(-1)  # (T, N)
+                # pi_old: the policy has not changed since it chose these actions.
+                dist_old = Categorical(logits=policy(rollout["obs"]))
+                logp_old = dist_old.log_prob(rollout["actions"])  # log pi_old(a|s), (T, N)
                 values = value_net(rollout["obs"])  # (T, N)
                 # V(s_{t+1}) is the value of the next stored obs. After a done step that obs is
                 # the episode's real final observation (the reset step reports it), so a
                 # truncated step bootstraps from it and a terminated one ignores it (common.gae).
-                last_value = value_net(torch.as_tensor(next_obs, dtype=torch.float32, device=device))  # (N,)
+                last_obs = torch.as_tensor(next_obs, dtype=torch.float32, device=device)
+                last_value = value_net(last_obs)  # (N,)
                 next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
-                advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
-                                        rollout["truncated"], cfg.gamma, cfg.lam)  # (T, N)
+                advantages = common.gae(rollout["rewards"], values, next_values,
+                                        rollout["terminated"], rollout["truncated"],
+                                        cfg.gamma, cfg.lam)  # (T, N)
                 returns = advantages + values  # value targets R_t = A_t + V(s_t), detached
 
             # --- update: flatten (T, N) to a batch, dropping the autoreset steps ---
             keep = rollout["valid"].reshape(-1)
             b_obs = rollout["obs"].reshape(T * N, obs_dim)[keep]
             b_act, b_logp = rollout["actions"].reshape(-1)[keep], logp_old.reshape(-1)[keep]
-            b_log_probs_old = log_probs.reshape(T * N, n_actions)[keep]  # pi_old in full, for the exact KL
             b_adv, b_ret = advantages.reshape(-1)[keep], returns.reshape(-1)[keep]
-            stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_log_probs_old, b_adv, b_ret,
-                               beta, cfg)
+            b_logits_old = dist_old.logits.reshape(T * N, n_actions)[keep]  # pi_old in full
+            stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_logits_old,
+                               b_adv, b_ret, beta, cfg)
             stats["beta"] = beta  # the beta this update used
             beta = adapt_beta(beta, stats["kl"], cfg)  # and the one the next update will use
 
             # --- logging ---
-            mean20 = float(np.mean(last20)) if last20 else float("nan")
-            common.append_csv(run_dir / "progress.csv", dict(
-                global_step=global_step, episodes=len(episode_returns), return_mean20=mean20,
-                lr=optimizer.param_groups[0]["lr"], **stats))
+            log(stats)
             if update % cfg.print_every == 0 or update == 1:
                 elapsed = time.time() - start_time
-                eta = elapsed / global_step * (cfg.total_timesteps - global_step)
-                print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  return(20) {mean20:6.1f}  "
+                print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  "
+                      f"return(20) {np.mean(last20) if last20 else float('nan'):6.1f}  "
                       f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:.2e}  "
-                      f"kl {stats['kl']:.4f}  beta {stats['beta']:.3g}  entropy {stats['entropy']:.3f}  "
-                      f"{common.format_time(elapsed)} (eta {common.format_time(eta)})",
-                      flush=True)
+                      f"kl {stats['kl']:.4f}  beta {stats['beta']:.3g}  "
+                      f"entropy {stats['entropy']:.3f}  {elapsed:.1f}s", flush=True)
     except KeyboardInterrupt:
         interrupted = True
         print("\ninterrupted: saving the model and the logs", flush=True)
     finally:
         envs.close()
-        common.save_checkpoint(dict(policy=policy.state_dict(), value=value_net.state_dict(), config=asdict(cfg),
-                                    obs_dim=obs_dim, n_actions=n_actions, global_step=global_step, beta=beta),
-                               run_dir / "model.pt")
+        for step, ep_return in zip(episode_steps, episode_returns):
+            common.append_csv(run_dir / "episodes.csv", {"global_step": step, "return": ep_return})
+        common.save_checkpoint(dict(policy=policy.state_dict(), value=value_net.state_dict(),
+                                    config=asdict(cfg), obs_dim=obs_dim, n_actions=n_actions,
+                                    global_step=global_step), run_dir / "model.pt")
 
     result = dict(run_dir=run_dir, solved=solved_step is not None, solved_step=solved_step,
                   global_step=global_step, episode_returns=episode_returns, eval_returns=[],
                   interrupted=interrupted)
     if interrupted:
         return result
-    print(f"trained {global_step} steps, {len(episode_returns)} episodes in {time.time() - start_time:.1f}s; "
-          f"model: {run_dir / 'model.pt'}", flush=True)
+    print(f"trained {global_step} steps, {len(episode_returns)} episodes in "
+          f"{time.time() - start_time:.1f}s; model: {run_dir / 'model.pt'}", flush=True)
 
-    # --- after training: greedy evaluation and GIFs ---
-    result["eval_returns"] = common.evaluate(cfg.env_id, greedy(policy, device), cfg.eval_episodes, cfg.eval_seed)
-    print(f"greedy evaluation over {cfg.eval_episodes} episodes: mean {np.mean(result['eval_returns']):.1f}, "
-          f"min {min(result['eval_returns']):.0f}", flush=True)
-    if cfg.gifs:
-        common.before_after_gifs(cfg.env_id, run_dir, greedy(untrained, device), greedy(policy, device), cfg.eval_seed,
-                                 every=2, scale=2)  # every 2nd frame at half size: small files
+    # --- after training: the learning curve, greedy evaluation and GIFs ---
+    if cfg.curves:
+        print(f"curve: {plots.draw_run(run_dir, threshold, solved_step)}", flush=True)
+    returns = common.evaluate(cfg.env_id, greedy(policy, device), cfg.eval_episodes, cfg.eval_seed)
+    print(f"greedy evaluation over {cfg.eval_episodes} episodes: mean {np.mean(returns):.1f}, "
+          f"min {min(returns):.0f}", flush=True)
+    result["eval_returns"] = returns
+    if cfg.gifs:  # every 2nd frame at half size: small files
+        for name, net in (("before.gif", untrained), ("after.gif", policy)):
+            ret = common.record_gif(cfg.env_id, greedy(net, device), run_dir / name, cfg.eval_seed,
+                                    every=2, scale=2)
+            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
     return result
 
 
@@ -435,15 +440,27 @@ def play(cfg: Config):
     policy = PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
     common.load_weights(policy, ckpt["policy"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
+    print(f"playing {cfg.eval_episodes} episodes of {env_id} with {cfg.eval}"
+          + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
     returns = common.evaluate(env_id, greedy(policy, "cpu"), cfg.eval_episodes, cfg.eval_seed,
-                              render_mode="human" if cfg.watch else None)
-    print(f"{env_id}, {cfg.eval}: returns {[round(r) for r in returns]}, mean {np.mean(returns):.1f}", flush=True)
+                              render_mode="human" if cfg.watch else None, log=cfg.watch)
+    print(f"{env_id}, {cfg.eval}: returns {[round(r) for r in returns]}, "
+          f"mean {np.mean(returns):.1f}", flush=True)
     return returns
 
 
 def main(argv=None):
-    """Parse the flags into a Config, then --eval, or train (and --watch); see common.main."""
-    common.main(Config, train, play, argv, description=__doc__.split("\n")[0])
+    """python ppo_kl_cartpole.py [flags]: train (then --watch), or --eval a saved model."""
+    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
+    with common.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        if cfg.eval:
+            play(cfg)
+            return
+        result = train(cfg)  # on Ctrl-C it saves the model and logs, says so, and returns
+        if result["interrupted"]:
+            raise SystemExit(130)
+        if cfg.watch:
+            play(dataclasses.replace(cfg, eval=str(result["run_dir"])))
 
 
 if __name__ == "__main__":

@@ -29,8 +29,9 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
-def test_smoke_run_writes_gifs_model_and_csv(script, tmp_path):
-    result = script.train(small(script, tmp_path, total_timesteps=2048, stop_when_solved=False, eval_episodes=2))
+def test_smoke_run_writes_gifs_model_csv_and_curve(script, tmp_path):
+    result = script.train(small(script, tmp_path, total_timesteps=2048, stop_when_solved=False,
+                                eval_episodes=2))
     run = result["run_dir"]
     assert run.parent == tmp_path and run.name.startswith(f"{script.__name__}__CartPole-v1__seed0__")
     assert result["global_step"] >= 1024 and len(result["eval_returns"]) == 2
@@ -42,7 +43,42 @@ def test_smoke_run_writes_gifs_model_and_csv(script, tmp_path):
     assert ckpt["config"]["env_id"] == "CartPole-v1" and ckpt["global_step"] == result["global_step"]
     log = rows(run / "progress.csv")
     assert len(log) >= 2 and int(log[-1]["global_step"]) == result["global_step"]
-    assert {"global_step", "episodes", "return_mean20"} <= set(log[0])
+    assert {"global_step", "episodes", "return_mean20", "loss_pi", "loss_v", "entropy"} <= set(log[0])
+    episodes = rows(run / "episodes.csv")
+    assert len(episodes) == len(result["episode_returns"]) == int(log[-1]["episodes"])
+    assert [float(e["return"]) for e in episodes] == result["episode_returns"]
+    assert_curve_drawn(run / "curve.png")
+
+
+def assert_curve_drawn(path):
+    """A valid PNG whose plot area is not blank: the curve's coloured pixels are there."""
+    image = iio.imread(path)
+    assert image.ndim == 3 and image.shape[0] > 200 and image.shape[1] > 300
+    rgb = image[..., :3].astype(int)
+    colored = (rgb.max(-1) - rgb.min(-1)) > 60  # not white, grey or black: a plotted line
+    assert colored.mean() > 0.003, colored.mean()
+
+
+def test_the_last_progress_row_is_where_training_ended(script, tmp_path):
+    """Stopped at the solve, the log's last row shows the solving state, not the update before."""
+    result = script.train(small(script, tmp_path, solved_return=30, gifs=False, eval_episodes=1))
+    assert result["solved"]
+    last = rows(result["run_dir"] / "progress.csv")[-1]
+    assert int(last["global_step"]) == result["solved_step"] == result["global_step"]
+    assert float(last["return_mean20"]) >= 30 and last["loss_pi"] == "nan"  # no update on it
+
+
+def test_max_grad_norm_zero_means_no_clipping(script, tmp_path):
+    """0 turns clipping off; it must not freeze the networks (every gradient times 0)."""
+    result = script.train(small(script, tmp_path, max_grad_norm=0.0, total_timesteps=1024,
+                                stop_when_solved=False, gifs=False, curves=False, eval_episodes=1))
+    fresh = script.train(small(script, tmp_path / "b", total_timesteps=1024, stop_when_solved=False,
+                               gifs=False, curves=False, eval_episodes=1, learning_rate=1e-12))  # ~ init
+    a = torch.load(result["run_dir"] / "model.pt", weights_only=True)
+    b = torch.load(fresh["run_dir"] / "model.pt", weights_only=True)
+    key = "policy" if "policy" in a else "model"
+    moved = [(a[key][k] - b[key][k]).abs().max().item() for k in a[key]]
+    assert max(moved) > 1e-3  # trained weights differ from the barely-trained ones
 
 
 @pytest.mark.slow
@@ -67,25 +103,44 @@ def test_same_seed_same_progress_csv(script, tmp_path):
 
 
 def test_eval_reloads_the_saved_model(script, tmp_path):
-    result = script.train(small(script, tmp_path, total_timesteps=6000, stop_when_solved=False, gifs=False,
-                                eval_episodes=4))
+    result = script.train(small(script, tmp_path, total_timesteps=6000, stop_when_solved=False,
+                                gifs=False, curves=False, eval_episodes=4))
     model = result["run_dir"] / "model.pt"
     assert script.play(small(script, tmp_path, eval=str(model), eval_episodes=4)) == result["eval_returns"]
-    p = run_script(f"{script.__name__}.py", "--eval", model, "--eval-episodes", 4)
+    # The run folder stands for its model.pt.
+    p = run_script(f"{script.__name__}.py", "--eval", result["run_dir"], "--eval-episodes", 4)
     assert p.returncode == 0, p.stderr
     assert f"returns {[round(r) for r in result['eval_returns']]}" in p.stdout
+
+
+def test_help_of_the_real_script(script):
+    p = run_script(f"{script.__name__}.py", "--help", timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "--learning-rate" in p.stdout and "--eval" in p.stdout and "Traceback" not in p.stderr
+
+
+def test_train_works_from_a_notebook(script, tmp_path, monkeypatch):
+    """train(Config(...)) from Python: no sys.argv parsing, no exit."""
+    monkeypatch.setattr("sys.argv", ["jupyter-kernel", "--f=/tmp/kernel.json"])
+    result = script.train(script.Config(run_dir=str(tmp_path), gifs=False, curves=False,
+                                        total_timesteps=1024, stop_when_solved=False,
+                                        eval_episodes=1, print_every=10**6))
+    assert result["global_step"] >= 1024 - 8 and not result["interrupted"]
 
 
 @pytest.mark.parametrize("args,needle", [
     (["--num-envs", "0"], "--num-envs must be positive"),
     (["--total-timesteps", "-5"], "--total-timesteps must be positive"),
-    (["--num-envs", "2", "--num-steps", "4", "--num-minibatches", "9"], "--num-minibatches (9) exceeds the batch size (8)"),
+    (["--total-timesteps", "100"], "is less than one rollout"),
+    (["--num-envs", "1000", "--num-steps", "100000000", "--total-timesteps", "10000000000000"],
+     "not enough memory"),
     (["--learning-rate", "abc"], "invalid float value"),
     (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
     (["--env-id", "Pendulum-v1"], "needs Discrete actions"),
     (["--run-dir", "{file}/runs"], "cannot create run folder"),
     (["--eval", "{tmp}/missing.pt"], "no checkpoint"),
-    (["--eval", "{file}"], "cannot read checkpoint"),
+    (["--eval", "{file}"], "truncated, corrupt or not a checkpoint"),
+    (["--eval", "{tmp}"], "no checkpoint at"),
     (["--watch"], "no display"),
 ])
 def test_bad_input_is_one_line_and_exit_2(script, tmp_path, args, needle):
@@ -94,10 +149,12 @@ def test_bad_input_is_one_line_and_exit_2(script, tmp_path, args, needle):
     args = [a.format(file=blocker, tmp=tmp_path) for a in args]
     if "--run-dir" not in args:
         args += ["--run-dir", str(tmp_path)]
+    before = set(tmp_path.iterdir())
     p = run_script(f"{script.__name__}.py", *args, timeout=120)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert "Traceback" not in p.stderr
     assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert set(tmp_path.iterdir()) == before  # no run folder left behind
 
 
 def test_ctrl_c_saves_model_and_log(script, tmp_path):
@@ -109,3 +166,24 @@ def test_ctrl_c_saves_model_and_log(script, tmp_path):
     ckpt = torch.load(run / "model.pt", weights_only=True)
     assert ckpt["global_step"] > 0
     assert len(rows(run / "progress.csv")) >= 1
+
+
+def test_ctrl_c_while_gifs_are_written(script, tmp_path):
+    """After training: one line, exit 130, the model and logs kept, no half-written file."""
+    code, out, err = interrupt(f"{script.__name__}.py", "--run-dir", tmp_path, "--solved-return", 30,
+                               after="greedy evaluation")
+    assert code == 130, (out, err)
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+    (run,) = tmp_path.iterdir()
+    assert torch.load(run / "model.pt", weights_only=True)["global_step"] > 0
+    assert rows(run / "progress.csv") and rows(run / "episodes.csv")
+    assert not list(run.glob("*.tmp*"))
+
+
+def test_ctrl_c_during_eval(script, tmp_path):
+    result = script.train(small(script, tmp_path, total_timesteps=1024, stop_when_solved=False,
+                                gifs=False, curves=False, eval_episodes=1))
+    code, out, err = interrupt(f"{script.__name__}.py", "--eval", result["run_dir"],
+                               "--eval-episodes", 100_000, after="playing")
+    assert code == 130, (out, err)
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err

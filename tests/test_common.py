@@ -154,6 +154,28 @@ def test_record_gif_writes_frames_showing_the_cart(tmp_path):
     first = frames[0]
     assert (first < 60).all(axis=-1).sum() > 200  # the black cart is drawn
     assert (first > 240).all(axis=-1).mean() > 0.5  # on a white background
+    assert list(tmp_path.iterdir()) == [path]  # no temporary file left behind
+
+
+def test_record_gif_keeps_the_one_pixel_track_when_halved(tmp_path):
+    """CartPole draws its track as a 1-pixel black line; halving by dropping rows can lose it.
+    Averaging 2 x 2 blocks keeps it as a grey line across the frame."""
+    full = tmp_path / "full.gif"
+    common.record_gif("CartPole-v1", lambda obs: 0, full, seed=0, max_frames=1)
+    track_row = int(np.argmax((iio.imread(full)[0] < 60).all(axis=-1).sum(axis=1) > 250))
+    assert track_row % 2 == 1  # an odd row: dropping every other row would lose it
+    half = tmp_path / "half.gif"
+    common.record_gif("CartPole-v1", lambda obs: 0, half, seed=0, max_frames=1, scale=2)
+    row = iio.imread(half)[0][track_row // 2]
+    assert (row < 200).all(axis=-1).mean() > 0.8  # still a line across the frame
+
+
+def test_record_gif_returns_the_whole_episode_even_when_frames_are_capped(tmp_path):
+    lean = lambda obs: int(obs[2] + obs[3] > 0)  # noqa: E731  (balances for hundreds of steps)
+    whole = common.evaluate("CartPole-v1", lean, episodes=1, seed=0)[0]
+    assert whole > 100
+    assert common.record_gif("CartPole-v1", lean, tmp_path / "x.gif", seed=0, max_frames=10) == whole
+    assert iio.imread(tmp_path / "x.gif").shape[0] <= 10
 
 
 # --- config -> CLI -----------------------------------------------------------
@@ -174,11 +196,6 @@ class Demo:
 
     def __post_init__(self):
         common.check(self.num_envs > 0, f"--num-envs must be positive, got {self.num_envs}")
-
-
-def test_field_docs_reads_the_docstrings():
-    assert common.field_docs(Demo) == {"num_envs": "parallel envs", "lr": "learning rate", "fast": "go fast",
-                                       "target_kl": "early stop; none = never"}
 
 
 def test_parse_config_flags_and_defaults():
@@ -204,6 +221,19 @@ def test_help_shows_docstrings(capsys):
         common.parse_config(Demo, ["--help"])
     out = capsys.readouterr().out
     assert "--num-envs" in out and "parallel envs" in out and "learning rate" in out
+
+
+@dataclasses.dataclass
+class Percent:
+    share: float = 0.5
+    """share of the batch, in % of it (50% = half)"""
+
+
+def test_help_survives_a_percent_sign(capsys):
+    with pytest.raises(SystemExit) as e:
+        common.parse_config(Percent, ["--help"])
+    assert e.value.code == 0
+    assert "in % of it (50% = half)" in capsys.readouterr().out
 
 
 # --- run folders, CSV, checkpoints, errors -----------------------------------
@@ -235,41 +265,60 @@ def test_checkpoint_round_trip_and_bad_files(tmp_path):
     common.save_checkpoint(dict(w=torch.arange(3.0), config=dict(a=1)), path)
     ckpt = common.load_checkpoint(path, required=("w", "config"))
     assert torch.equal(ckpt["w"], torch.arange(3.0)) and not (tmp_path / "m.pt.tmp").exists()
-    with pytest.raises(common.UserError, match="missing policy"):
+    with pytest.raises(common.UserError, match="lacks {'policy'}"):
         common.load_checkpoint(path, required=("policy",))
     with pytest.raises(common.UserError, match="no checkpoint"):
         common.load_checkpoint(tmp_path / "nope.pt")
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"\x00garbage" * 10)
-    with pytest.raises(common.UserError, match="cannot read checkpoint"):
+    with pytest.raises(common.UserError, match="truncated, corrupt or not a checkpoint"):
         common.load_checkpoint(bad)
-    half = tmp_path / "half.pt"
+    half = tmp_path / "half.pt"  # a copy cut short: torch itself says "Invalid argument" or so
     half.write_bytes(path.read_bytes()[:100])
-    with pytest.raises(common.UserError, match="cannot read checkpoint"):
+    with pytest.raises(common.UserError, match="truncated, corrupt or not a checkpoint"):
         common.load_checkpoint(half)
+    # A pickle with Python objects in it is refused, and nothing suggests weights_only=False.
+    unsafe = tmp_path / "unsafe.pt"
+    torch.save(dict(w=Demo()), unsafe)
+    with pytest.raises(common.UserError, match="not a checkpoint of these scripts") as e:
+        common.load_checkpoint(unsafe)
+    assert "weights_only" not in str(e.value)
+    # A run folder stands for its model.pt; a folder without one says so.
+    common.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "model.pt")
+    assert torch.equal(common.load_checkpoint(tmp_path)["w"], torch.ones(1))
+    with pytest.raises(common.UserError, match="no checkpoint at .*empty.model.pt"):
+        (tmp_path / "empty").mkdir()
+        common.load_checkpoint(tmp_path / "empty")
 
 
-def test_make_env_errors_are_user_errors():
+def test_env_errors_are_user_errors():
     with pytest.raises(common.UserError, match="unknown environment"):
-        common.make_env("NoSuchEnv-v0")
+        common.evaluate("NoSuchEnv-v0", lambda obs: 0, 1, 0)
     with pytest.raises(common.UserError, match="unknown environment"):
         common.make_vec_env("NoSuchEnv-v0", 2, 0)
+    with pytest.raises(common.UserError, match="Discrete"):
+        common.make_vec_env("Pendulum-v1", 2, 0)
     import gymnasium as gym
 
-    with pytest.raises(common.UserError, match="Discrete"):
-        common.require_discrete("Pendulum-v1", gym.make("Pendulum-v1").action_space)
+    gym.register("CartPoleNoThreshold-v0", "gymnasium.envs.classic_control:CartPoleEnv")
+    with pytest.raises(common.UserError, match="has no reward_threshold; pass --solved-return"):
+        common.make_vec_env("CartPoleNoThreshold-v0", 2, 0)
+    assert common.make_vec_env("CartPoleNoThreshold-v0", 2, 0, solved_return=50)[2] == 50
+    envs, obs, solved = common.make_vec_env("CartPole-v1", 2, 0)
+    assert solved == 475 and obs.shape == (2, 4)
+    assert common.make_vec_env("CartPole-v1", 2, 0, solved_return=100)[2] == 100
 
 
-def test_exit_on_user_error_prints_one_line(tmp_path):
-    code = textwrap.dedent("""
-        import common
-        with common.exit_on_user_error():
-            raise common.UserError("something the user can fix")
-    """)
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path,
+@pytest.mark.parametrize("body,code,stderr", [
+    ("raise common.UserError('something the user can fix')", 2, "error: something the user can fix\n"),
+    ("raise KeyboardInterrupt", 130, "\ninterrupted (Ctrl-C)\n"),
+])
+def test_clear_exit_prints_one_line(tmp_path, body, code, stderr):
+    program = f"import common\nwith common.clear_exit():\n    {body}\n"
+    p = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, cwd=tmp_path,
                        env={"PYTHONPATH": str(__import__("pathlib").Path(common.__file__).parent), "PATH": ""})
-    assert p.returncode == 2
-    assert p.stderr == "error: something the user can fix\n"
+    assert p.returncode == code
+    assert p.stderr == stderr
 
 
 @pytest.mark.parametrize("preset,expected", [({}, ("dummy", "egl")),
@@ -283,27 +332,6 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert p.returncode == 0, p.stderr
     assert tuple(p.stdout.split()) == expected
-
-
-def test_adam_matches_torch_optim_adam():
-    torch.manual_seed(0)
-    net_a = torch.nn.Sequential(torch.nn.Linear(3, 8), torch.nn.Tanh(), torch.nn.Linear(8, 2))
-    net_b = __import__("copy").deepcopy(net_a)
-    start = __import__("copy").deepcopy(net_a)
-    ours = common.Adam(net_a.parameters(), lr=3e-3, eps=1e-5)
-    ref = torch.optim.Adam(net_b.parameters(), lr=3e-3, eps=1e-5)
-    for step in range(25):
-        x = torch.randn(16, 3)
-        for net, opt in ((net_a, ours), (net_b, ref)):
-            opt.zero_grad()
-            (net(x) ** 2).mean().backward()
-            opt.step()
-        if step == 10:  # a learning-rate change is honoured, as when annealing
-            ours.param_groups[0]["lr"] = ref.param_groups[0]["lr"] = 1e-3
-    for a, b in zip(net_a.parameters(), net_b.parameters()):
-        torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6)
-    # ...and they moved: equal because both stepped alike, not because neither stepped.
-    assert all(not torch.allclose(a, s) for a, s in zip(net_a.parameters(), start.parameters()))
 
 
 def test_load_weights_mismatch_is_a_user_error():

@@ -53,7 +53,7 @@ def test_truncated_is_not_terminal_in_the_buffer():
 def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
     """Run the real loop on an env with a 3-step time limit: what the buffer stores as
     terminal must be the env's `terminated`, never its `truncated`."""
-    real_make = ddpg.common.make_env
+    real_make = ddpg.gym.make
     flags = []  # (terminated, truncated) as the env returned them
 
     def make_short_env(env_id, **kw):
@@ -67,7 +67,7 @@ def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
         env.step = step
         return env
 
-    monkeypatch.setattr(ddpg.common, "make_env", make_short_env)
+    monkeypatch.setattr(ddpg.gym, "make", make_short_env)
     stored = []
     real_add = ddpg.ReplayBuffer.add
     monkeypatch.setattr(ddpg.ReplayBuffer, "add", lambda self, o, a, r, no, terminated: (
@@ -90,6 +90,29 @@ def test_soft_update_matches_hand_computation():
     torch.testing.assert_close(source.weight, w_s)  # the source is untouched
 
 
+def test_td_target_by_hand():
+    """y = r + gamma * not_done * Q'(s', mu'(s')): no future after a termination."""
+    y = ddpg.td_target(torch.tensor([1.0, 1.0, -2.0]), torch.tensor([1.0, 0.0, 1.0]),
+                       torch.tensor([10.0, 10.0, 4.0]), 0.9)
+    assert y.tolist() == pytest.approx([1 + 0.9 * 10, 1.0, -2 + 0.9 * 4])
+
+
+def test_actor_loss_is_minus_q_and_its_step_raises_q():
+    torch.manual_seed(0)
+    actor = ddpg.Actor(3, 2, 16, np.full(2, -1.0), np.full(2, 1.0))
+    critic = ddpg.Critic(3, 2, 16)
+    obs = torch.randn(64, 3)
+    q_before = critic(obs, actor(obs)).mean().item()
+    loss = ddpg.compute_loss_actor(actor, critic, obs)
+    assert loss.item() == pytest.approx(-q_before)
+    opt = torch.optim.Adam(actor.parameters(), lr=1e-2)
+    for _ in range(20):  # descending the loss climbs Q(s, mu(s)); the critic stays as it is
+        opt.zero_grad()
+        ddpg.compute_loss_actor(actor, critic, obs).backward()
+        opt.step()
+    assert critic(obs, actor(obs)).mean().item() > q_before + 1e-3
+
+
 def test_critic_takes_the_action_at_its_second_layer():
     critic = ddpg.Critic(obs_dim=17, act_dim=6, hidden=32)
     assert critic.l1.in_features == 17 and critic.l2.in_features == 32 + 6
@@ -104,6 +127,8 @@ def small(tmp_path, **kw):
 def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
     result = ddpg.train(small(tmp_path))
     run = result["run_dir"]
+    assert {p.name for p in run.iterdir()} == {"evaluations.csv", "model.pt", "best.pt", "best.gif",
+                                               "curve.png", "before.gif", "after.gif"}
     rows = list(csv.DictReader(open(run / "evaluations.csv")))
     assert [int(r["global_step"]) for r in rows] == [300, 600]
     assert {"eval_mean", "eval_std"} <= set(rows[0])
@@ -125,6 +150,76 @@ def test_other_mujoco_tasks_run(tmp_path, env_id):
     assert result["global_step"] == 300 and len(result["evaluations"]) == 1
     ckpt = torch.load(result["run_dir"] / "model.pt", weights_only=True)
     assert ckpt["config"]["env_id"] == env_id
+
+
+def test_best_pt_holds_the_best_evaluation(tmp_path):
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=2000,
+                              start_steps=500, eval_every=250, eval_episodes=2, gifs=False,
+                              curves=False, actor_lr=1e-3, critic_lr=1e-3))
+    rows = list(csv.DictReader(open(result["run_dir"] / "evaluations.csv")))
+    means = [float(r["eval_mean"]) for r in rows]
+    assert len(set(means)) > 1  # the evaluations differ, so "the best" means something
+    best = ddpg.play(ddpg.Config(eval=str(result["run_dir"] / "best.pt"), eval_episodes=2))
+    assert np.mean(best) == pytest.approx(max(means), rel=1e-5)
+    step = torch.load(result["run_dir"] / "best.pt", weights_only=True)["global_step"]
+    assert step == int(rows[int(np.argmax(means))]["global_step"])
+
+
+def test_curve_is_redrawn_at_every_evaluation(tmp_path, monkeypatch):
+    from test_cartpole_scripts import assert_curve_drawn
+
+    seen = []
+    real_draw = ddpg.plots.draw_run
+
+    def draw(run_dir, *args):
+        path = real_draw(run_dir, *args)
+        seen.append(path.read_bytes())
+        return path
+    monkeypatch.setattr(ddpg.plots, "draw_run", draw)
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=900,
+                              start_steps=300, eval_every=300, eval_episodes=1, gifs=False))
+    assert len(seen) == 3 and len(set(seen)) == 3  # one new picture per evaluation
+    assert_curve_drawn(result["run_dir"] / "curve.png")
+
+
+def test_the_camera_follows_the_walker():
+    """Moved 6 m forward, the walker is still in the picture of the GIFs' camera; gymnasium's
+    default free camera shows empty floor there."""
+    import gymnasium as gym
+    import mujoco
+
+    def walker_pixels(**make_kw):
+        env = gym.make("Walker2d-v5", render_mode="rgb_array", **make_kw)
+        env.reset(seed=0)
+        counts = []
+        for dx in (0.0, 6.0):
+            data = env.unwrapped.data
+            data.qpos[0] += dx  # the torso's x position
+            mujoco.mj_forward(env.unwrapped.model, data)
+            frame = env.render().astype(int)
+            counts.append(int(((frame[..., 0] - frame[..., 1]) > 40).sum()))  # the walker's colours
+        env.close()
+        return counts
+
+    start, moved = walker_pixels(**ddpg.CAMERA)
+    assert start > 500 and moved > 0.5 * start
+    assert walker_pixels()[1] < 50  # the default camera lost it: the test can tell
+
+
+def test_resume_restores_the_weights_and_takes_the_new_learning_rates(tmp_path):
+    first = ddpg.train(small(tmp_path / "a", gifs=False, curves=False))
+    saved = torch.load(first["run_dir"] / "model.pt", weights_only=True)
+    # Resume into a warm-up only (no update): the weights must come back exactly as saved.
+    second = ddpg.train(small(tmp_path / "b", gifs=False, curves=False, total_timesteps=700,
+                              start_steps=100, actor_lr=1e-5, critic_lr=2e-5,
+                              resume=str(first["run_dir"] / "model.pt")))
+    resumed = torch.load(second["run_dir"] / "model.pt", weights_only=True)
+    assert resumed["global_step"] == 700
+    for key in ("actor", "critic", "actor_target", "critic_target"):
+        for name, tensor in saved[key].items():
+            assert torch.equal(resumed[key][name], tensor), (key, name)
+    assert resumed["actor_opt"]["param_groups"][0]["lr"] == 1e-5  # this run's flags win
+    assert resumed["critic_opt"]["param_groups"][0]["lr"] == 2e-5
 
 
 def test_resume_continues_from_the_saved_step(tmp_path):
@@ -149,16 +244,23 @@ def test_same_seed_same_evaluations(tmp_path):
     (["--env-id", "CartPole-v1"], "needs continuous (Box) actions"),
     (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
     (["--tau", "0"], "--tau must be in (0, 1]"),
+    (["--start-steps", "0"], "--start-steps must be at least --batch-size"),
+    (["--buffer-size", "10000000000", "--total-timesteps", "100000000000"],
+     "cannot allocate a replay buffer"),
+    (["--eval", "{tmp}"], "no checkpoint at"),
     (["--eval", "{tmp}/missing.pt"], "no checkpoint"),
-    (["--resume", "{file}"], "cannot read checkpoint"),
+    (["--resume", "{file}"], "truncated, corrupt or not a checkpoint"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"not a checkpoint")
     args = [a.format(tmp=tmp_path, file=bad) for a in args]
-    p = run_script("ddpg_walker.py", *args, "--run-dir", tmp_path, "--total-timesteps", 50, timeout=120)
+    if "--total-timesteps" not in args:
+        args += ["--total-timesteps", "50"]
+    p = run_script("ddpg_walker.py", *args, "--run-dir", tmp_path, timeout=120)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert sorted(tmp_path.iterdir()) == [bad]  # no run folder left behind
 
 
 def test_missing_mujoco_is_one_clear_line(tmp_path):
@@ -192,3 +294,18 @@ def test_learns_inverted_pendulum_with_a_fixed_seed(tmp_path):
     evaluations = ddpg.train(cfg)["evaluations"]
     assert evaluations[0][1] < 200  # untrained-ish: the pole falls
     assert evaluations[-1][1] >= 900, evaluations  # near the maximum of 1000
+
+
+def test_help_of_the_real_script():
+    p = run_script("ddpg_walker.py", "--help", timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "--threads" in p.stdout and "--expl-noise" in p.stdout
+
+
+def test_ctrl_c_during_eval(tmp_path):
+    first = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
+                             start_steps=300, eval_every=300, eval_episodes=1, gifs=False))
+    code, out, err = interrupt("ddpg_walker.py", "--eval", first["run_dir"] / "best.pt",
+                               "--eval-episodes", 100_000, after="playing")
+    assert code == 130, (out, err)
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err

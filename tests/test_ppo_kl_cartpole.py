@@ -1,21 +1,10 @@
-"""PPO-penalty's two pieces of its own: the exact KL and the adaptive beta rule."""
+"""PPO-penalty's pieces of its own: the KL-penalized loss and the adaptive beta rule."""
 
 import pytest
 import torch
 from torch.distributions import Categorical, kl_divergence
 
 import ppo_kl_cartpole as kl
-
-
-def test_exact_kl_matches_torch_kl_divergence():
-    torch.manual_seed(0)
-    old, new = torch.randn(50, 3), torch.randn(50, 3)
-    got = kl.exact_kl(torch.log_softmax(old, -1), torch.log_softmax(new, -1))
-    want = kl_divergence(Categorical(logits=old), Categorical(logits=new))  # KL(pi_old || pi)
-    torch.testing.assert_close(got, want)
-    assert (got >= 0).all()
-    same = torch.log_softmax(old, -1)
-    torch.testing.assert_close(kl.exact_kl(same, same), torch.zeros(50))
 
 
 @pytest.mark.parametrize("d,expected", [
@@ -45,17 +34,21 @@ def test_loss_penalizes_moving_away_from_pi_old():
     policy = kl.PolicyNetwork(4, 2, 16)
     obs, act, adv = torch.randn(32, 4), torch.randint(0, 2, (32,)), torch.randn(32)
     with torch.no_grad():
-        log_probs_old = torch.log_softmax(policy(obs), -1)
-    logp_old = log_probs_old.gather(1, act[:, None]).squeeze(1)
-    loss0, _ = kl.compute_loss_pi(policy, obs, act, adv, logp_old, log_probs_old, beta=5.0)
+        logits_old = policy(obs)
+    logp_old = Categorical(logits=logits_old).log_prob(act)
+    loss0, _, info = kl.compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta=5.0)
     assert loss0.item() == pytest.approx(-adv.mean().item(), abs=1e-6)  # r = 1, KL = 0
+    assert info["kl"].item() == pytest.approx(0.0, abs=1e-7)
     with torch.no_grad():
         for p in policy.parameters():
             p.add_(0.5 * torch.randn_like(p))
-    loss_b0, log_probs = kl.compute_loss_pi(policy, obs, act, adv, logp_old, log_probs_old, beta=0.0)
-    loss_b5, _ = kl.compute_loss_pi(policy, obs, act, adv, logp_old, log_probs_old, beta=5.0)
-    d = kl.exact_kl(log_probs_old, log_probs).mean()
-    assert d > 0 and (loss_b5 - loss_b0).item() == pytest.approx(5.0 * d.item(), rel=1e-5)
+    loss_b0, _, _ = kl.compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta=0.0)
+    loss_b5, _, info = kl.compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta=5.0)
+    # KL(pi_old || pi) by hand: sum_a pi_old(a|s) (log pi_old(a|s) - log pi(a|s)), averaged.
+    lp_old, lp = torch.log_softmax(logits_old, -1), torch.log_softmax(policy(obs), -1)
+    d = (lp_old.exp() * (lp_old - lp)).sum(-1).mean()
+    assert d > 0 and info["kl"].item() == pytest.approx(d.item(), rel=1e-5)
+    assert (loss_b5 - loss_b0).item() == pytest.approx(5.0 * d.item(), rel=1e-5)
 
 
 def test_beta_and_kl_are_logged(tmp_path):

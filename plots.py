@@ -1,0 +1,159 @@
+"""Learning curves from run folders: each run's curve.png, and several runs compared.
+
+The scripts call draw_run(run_dir) after training (DDPG: after every evaluation) to
+write run_dir/curve.png. From the command line, overlay the runs of one or more
+scripts in one picture: runs of the same script become one mean line with a band
+from the lowest to the highest run, one colour per script.
+
+    python plots.py runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> compare.png
+    python plots.py runs/ddpg_walker__* --out walker.png
+
+matplotlib is imported only here, with its Agg backend (no display needed), and
+never during training. Labels are ASCII: not every machine has CJK fonts.
+"""
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+import numpy as np
+
+
+def read_csv(path):
+    """A CSV file as {column: float array}; empty cells are nan."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    columns = rows[0].keys() if rows else []
+    return {k: np.array([float(r[k]) if r[k] not in ("", None) else np.nan for r in rows])
+            for k in columns}
+
+
+def running_mean(y, k):
+    """Mean of the last k values at each point (fewer at the start)."""
+    c = np.cumsum(np.insert(np.asarray(y, dtype=float), 0, 0.0))  # c[i] = sum of the first i
+    i = np.arange(1, len(y) + 1)
+    lo = np.maximum(i - k, 0)
+    return (c[i] - c[lo]) / (i - lo)
+
+
+def pyplot():
+    import matplotlib
+    matplotlib.use("Agg")  # files only: works on a machine without a display
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def draw_run(run_dir, solved_return=None, solved_step=None):
+    """Write run_dir/curve.png from the run's CSV logs; returns its path."""
+    run_dir = Path(run_dir)
+    plt = pyplot()
+    if (run_dir / "evaluations.csv").exists():  # DDPG
+        fig = draw_ddpg(plt, read_csv(run_dir / "evaluations.csv"))
+    else:
+        fig = draw_cartpole(plt, read_csv(run_dir / "episodes.csv"),
+                            read_csv(run_dir / "progress.csv"), solved_return, solved_step)
+    fig.axes[0].set_title(run_dir.name, fontsize=8)
+    fig.tight_layout()
+    path = run_dir / "curve.png"
+    fig.savefig(f"{path}.tmp.png", dpi=90)  # then renamed: a reader never sees half a file
+    plt.close(fig)
+    Path(f"{path}.tmp.png").replace(path)
+    return path
+
+
+def draw_cartpole(plt, episodes, progress, solved_return, solved_step):
+    """Episode returns (faint) and their mean over 20 episodes; below, the update's diagnostics."""
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True,
+                                  gridspec_kw=dict(height_ratios=[3, 1.4]))
+    steps, returns = episodes.get("global_step", []), episodes.get("return", [])
+    ax.plot(steps, returns, color="C0", alpha=0.3, lw=0.8, label="episode return")
+    ax.plot(steps, running_mean(np.asarray(returns), 20), color="C0", lw=2,
+            label="mean of the last 20 episodes")
+    if solved_return is not None:
+        ax.axhline(solved_return, color="gray", ls="--", lw=1, label=f"solved: {solved_return:g}")
+    if solved_step is not None:
+        ax.axvline(solved_step, color="C2", ls=":", lw=1.5, label=f"solved at step {solved_step}")
+    ax.set_ylabel("return")
+    ax.legend(loc="upper left", fontsize=8)
+    # The diagnostics: entropy of pi (left axis); how far each update moved pi (right axis).
+    if "entropy" in progress:
+        ax2.plot(progress["global_step"], progress["entropy"], color="C1", label="entropy")
+        ax2.set_ylabel("entropy (nats)", color="C1")
+    moved = [k for k in ("approx_kl", "kl", "beta") if k in progress]
+    if moved:
+        right = ax2.twinx()
+        for key, color in zip(moved, ("C3", "C4")):
+            right.plot(progress["global_step"], progress[key], color=color, lw=1, label=key)
+        right.set_yscale("log")
+        right.legend(loc="upper right", fontsize=8)
+    ax2.set_xlabel("env steps")
+    fig.tight_layout()
+    return fig
+
+
+def draw_ddpg(plt, evaluations):
+    """Evaluation returns (mean +- std over the evaluation episodes) and the training return."""
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    x, mean, std = evaluations["global_step"], evaluations["eval_mean"], evaluations["eval_std"]
+    ax.plot(x, mean, color="C0", lw=2, label="evaluation: mean return, no noise")
+    ax.fill_between(x, mean - std, mean + std, color="C0", alpha=0.2, label="+- std")
+    ax.plot(x, evaluations["train_return_mean10"], color="C1", lw=1,
+            label="training: mean of the last 10 episodes")
+    ax.set_xlabel("env steps")
+    ax.set_ylabel("return")
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def curve_of(run_dir):
+    """(steps, returns) of one run: DDPG's evaluation means, or CartPole's mean of 20."""
+    if (run_dir / "evaluations.csv").exists():
+        ev = read_csv(run_dir / "evaluations.csv")
+        return ev["global_step"], ev["eval_mean"], "evaluation return"
+    pr = read_csv(run_dir / "progress.csv")
+    return pr["global_step"], pr["return_mean20"], "mean return of the last 20 episodes"
+
+
+def compare(run_dirs, out):
+    """Overlay runs: per script, the mean over its runs and a band from lowest to highest."""
+    groups = {}
+    for run_dir in map(Path, run_dirs):
+        if not ((run_dir / "progress.csv").exists() or (run_dir / "evaluations.csv").exists()):
+            print(f"error: {run_dir} is not a run folder (no progress.csv or evaluations.csv)",
+                  file=sys.stderr)
+            sys.exit(2)
+        groups.setdefault(run_dir.name.split("__")[0], []).append(curve_of(run_dir))
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for color, (script, curves) in enumerate(groups.items()):
+        grid = np.linspace(0, max(steps.max() for steps, _, _ in curves), 200)
+        # A run that stopped early (solved) keeps its last value to the end of the grid.
+        ys = np.array([np.interp(grid, steps, np.nan_to_num(y, nan=0.0)) for steps, y, _ in curves])
+        ax.plot(grid, ys.mean(0), color=f"C{color}", lw=2, label=f"{script} ({len(curves)} runs)")
+        if len(curves) > 1:
+            ax.fill_between(grid, ys.min(0), ys.max(0), color=f"C{color}", alpha=0.2)
+    ax.set_xlabel("env steps")
+    ax.set_ylabel(curves[0][2])
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+    return out
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("runs", nargs="+", help="run folders (runs/<script>__<env>__seed<k>__<time>)")
+    parser.add_argument("--out", default="compare.png", help="the PNG to write")
+    args = parser.parse_args(argv)
+    try:
+        print(f"wrote {compare(args.runs, args.out)}")
+    except OSError as e:
+        print(f"error: cannot write {args.out}: {e.strerror}", file=sys.stderr)
+        sys.exit(2)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,103 @@
+"""PPO-clip's own pieces: the clipped surrogate, the update's minibatches and early stop,
+and the learning-rate schedule."""
+
+import csv
+
+import pytest
+import torch
+from torch.distributions import Categorical
+
+import ppo_cartpole as ppo
+
+
+class FixedPolicy(torch.nn.Module):
+    """pi(.|s) from one free logit vector per state: the ratio is set by hand."""
+
+    def __init__(self, logits):
+        super().__init__()
+        self.logits = torch.nn.Parameter(logits.clone())
+
+    def forward(self, obs):
+        return self.logits
+
+
+@pytest.mark.parametrize("adv,ratio,grad_is_zero", [
+    (+1.0, 1.5, True),   # A > 0 and r > 1 + eps: clipped, no push to raise pi(a|s) further
+    (+1.0, 1.1, False),  # A > 0 inside the range: the gradient raises pi(a|s)
+    (+1.0, 0.5, False),  # A > 0 and r < 1 - eps: min() keeps the unclipped term, still pushed
+    (-1.0, 0.5, True),   # A < 0 and r < 1 - eps: clipped, no push to lower pi(a|s) further
+    (-1.0, 0.9, False),
+    (-1.0, 1.5, False),  # A < 0 and r > 1 + eps: the unclipped term, pulled back
+])
+def test_clipped_surrogate_gradient_is_zero_only_on_the_clipped_side(adv, ratio, grad_is_zero):
+    """L_CLIP = min(r A, clip(r, 1 - eps, 1 + eps) A) (eq. 7): flat where the clip binds."""
+    policy = FixedPolicy(torch.log(torch.tensor([[0.4, 0.6]])))
+    act = torch.tensor([1])
+    logp_old = torch.log(torch.tensor([0.6 / ratio]))  # so that r = pi / pi_old = ratio
+    loss, _, info = ppo.compute_loss_pi(policy, None, act, torch.tensor([adv]), logp_old, 0.2)
+    r = ratio
+    assert loss.item() == pytest.approx(-min(r * adv, min(max(r, 0.8), 1.2) * adv), rel=1e-5)
+    assert info["clipfrac"].item() == (1.0 if abs(r - 1) > 0.2 else 0.0)
+    loss.backward()
+    grad = policy.logits.grad.abs().sum().item()
+    assert (grad == 0) if grad_is_zero else (grad > 1e-3)
+    if not grad_is_zero:  # descending the loss moves pi(a|s) the way A says
+        assert (policy.logits.grad[0, 1] < 0) == (adv > 0)
+
+
+def test_approx_kl_is_zero_at_pi_old_and_positive_after():
+    torch.manual_seed(0)
+    policy = ppo.PolicyNetwork(4, 2, 16)
+    obs, act, adv = torch.randn(64, 4), torch.randint(0, 2, (64,)), torch.randn(64)
+    with torch.no_grad():
+        logp_old = Categorical(logits=policy(obs)).log_prob(act)
+    _, _, info = ppo.compute_loss_pi(policy, obs, act, adv, logp_old, 0.2)
+    assert info["approx_kl"].item() == pytest.approx(0.0, abs=1e-7)
+    with torch.no_grad():
+        for p in policy.parameters():
+            p.add_(0.3 * torch.randn_like(p))
+    _, _, info = ppo.compute_loss_pi(policy, obs, act, adv, logp_old, 0.2)
+    assert info["approx_kl"].item() > 1e-4
+
+
+def batch(B=30, seed=0):
+    torch.manual_seed(seed)
+    policy, value_net = ppo.PolicyNetwork(4, 2, 8), ppo.ValueNetwork(4, 8)
+    obs, act = torch.randn(B, 4), torch.randint(0, 2, (B,))
+    with torch.no_grad():
+        logp = Categorical(logits=policy(obs)).log_prob(act)
+    return policy, value_net, obs, act, logp, torch.randn(B), torch.randn(B)
+
+
+@pytest.mark.parametrize("B,minibatches", [(30, 4), (7, 4), (256, 4), (250, 8)])
+def test_update_takes_exactly_epochs_times_minibatches_steps(B, minibatches):
+    policy, value_net, obs, act, logp, adv, ret = batch(B)
+    opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=1e-3)
+    cfg = ppo.Config(update_epochs=3, num_minibatches=minibatches)
+    ppo.ppo_update(policy, value_net, opt, obs, act, logp, adv, ret, cfg)
+    assert opt.state_dict()["state"][0]["step"].item() == 3 * minibatches
+
+
+def test_early_stop_halts_the_policy_and_keeps_training_v():
+    """Tutorial 002: once approx_kl > 1.5 * target_kl, no more policy steps; V goes on."""
+    policy, value_net, obs, act, logp, adv, ret = batch(64)
+    opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=0.05)
+    cfg = ppo.Config(update_epochs=10, num_minibatches=4, target_kl=1e-6)  # stops at once
+    stats = ppo.ppo_update(policy, value_net, opt, obs, act, logp, adv, ret, cfg)
+    state = opt.state_dict()["state"]
+    n_policy = len(list(policy.parameters()))
+    steps = [state[i]["step"].item() for i in sorted(state)]
+    # The first minibatch sees pi = pi_old (KL 0) and steps; after that the policy is frozen.
+    assert steps[:n_policy] == [1] * n_policy and stats["policy_stopped"] == 1
+    assert steps[n_policy:] == [40] * (len(steps) - n_policy)  # V: 10 epochs x 4 minibatches
+
+
+def test_learning_rate_anneals_linearly_to_zero(tmp_path):
+    cfg = ppo.Config(total_timesteps=256 * 5, stop_when_solved=False, gifs=False, curves=False,
+                     eval_episodes=1, run_dir=str(tmp_path), print_every=10**6)
+    rows = list(csv.DictReader(open(ppo.train(cfg)["run_dir"] / "progress.csv")))
+    # lr_k = lr * (1 - (k - 1) / K) for updates k = 1..K: 4e-3, 3.2e-3, ..., 0.8e-3
+    assert [float(r["lr"]) for r in rows] == pytest.approx([4e-3 * (1 - k / 5) for k in range(5)])
+    cfg.anneal_lr = False
+    rows = list(csv.DictReader(open(ppo.train(cfg)["run_dir"] / "progress.csv")))
+    assert {float(r["lr"]) for r in rows} == {4e-3}
