@@ -81,6 +81,9 @@ class Config:
     gifs: bool = True
     """write before.gif (untrained actor), after.gif (trained actor) and best.gif (the best
     evaluation so far, refreshed as it improves) to the run folder"""
+    tensorboard: bool = False
+    """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
+    names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
     curves: bool = True
     """write curve.png (evaluation returns against env steps) at every evaluation"""
     watch: bool = False
@@ -97,6 +100,7 @@ class Config:
     measures what more threads give on an idle machine"""
 
     def __post_init__(self):
+        common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
         for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every",
                      "eval_episodes", "print_every", "actor_lr", "critic_lr", "threads"):
             common.check(getattr(self, name) > 0,
@@ -393,6 +397,9 @@ def train(cfg: Config):
                                           run_dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
                 if cfg.curves:
                     plots.draw_run(run_dir)  # rewritten at every evaluation: open it any time
+                if cfg.tensorboard:
+                    plots.to_tensorboard(run_dir, sps=(global_step - first_step)
+                                         / (time.time() - start_time))
     except KeyboardInterrupt:
         interrupted = True
         print("\ninterrupted: saving the model and the logs", flush=True)

@@ -10,6 +10,8 @@ from the lowest to the highest run, one colour per script.
 
 matplotlib is imported only here, with its Agg backend (no display needed), and
 never during training. Labels are ASCII: not every machine has CJK fonts.
+to_tensorboard(run_dir) writes the same CSV logs as TensorBoard scalars, under
+CleanRL's tag names, so that our runs and CleanRL's overlay in one TensorBoard.
 """
 
 import argparse
@@ -107,6 +109,45 @@ def draw_ddpg(plt, evaluations):
     return fig
 
 
+# CSV column -> TensorBoard tag (CleanRL's names where CleanRL logs the same thing).
+TAGS = {"return": "charts/episodic_return", "return_mean20": "charts/return_mean20",
+        "lr": "charts/learning_rate", "sps": "charts/SPS", "loss_pi": "losses/policy_loss",
+        "loss_v": "losses/value_loss", "entropy": "losses/entropy", "approx_kl": "losses/approx_kl",
+        "clipfrac": "losses/clipfrac", "kl": "losses/kl", "beta": "charts/beta",
+        "eval_mean": "eval/episodic_return", "eval_std": "eval/episodic_return_std",
+        "train_return_mean10": "charts/episodic_return_mean10"}
+NO_TENSORBOARD = "--tensorboard needs the tensorboard package: pip install tensorboard"
+
+
+def tensorboard_installed():
+    try:
+        import tensorboard  # noqa: F401
+        return True
+    except ImportError:
+        return False
+
+
+def to_tensorboard(run_dir, sps=None):
+    """(Re)write run_dir's TensorBoard event file from its CSV logs, step by step, and
+    `sps` (env steps per second so far; kept out of the CSVs, which are reproducible)."""
+    from torch.utils.tensorboard import SummaryWriter
+
+    run_dir = Path(run_dir)
+    for old in run_dir.glob("events.out.tfevents.*"):
+        old.unlink()
+    with SummaryWriter(log_dir=str(run_dir)) as writer:
+        for name in ("episodes.csv", "progress.csv", "evaluations.csv"):
+            if not (run_dir / name).exists():
+                continue
+            table = read_csv(run_dir / name)
+            for i, step in enumerate(table["global_step"]):
+                for key, values in table.items():
+                    if key not in ("global_step", "episodes") and np.isfinite(values[i]):
+                        writer.add_scalar(TAGS.get(key, f"charts/{key}"), values[i], int(step))
+        if sps is not None:
+            writer.add_scalar("charts/SPS", sps, int(step))
+
+
 def curve_of(run_dir):
     """(steps, returns) of one run: DDPG's evaluation means, or CartPole's mean of 20."""
     if (run_dir / "evaluations.csv").exists():
@@ -145,7 +186,7 @@ def compare(run_dirs, out):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("runs", nargs="+", help="run folders (runs/<script>__<env>__seed<k>__<time>)")
+    parser.add_argument("runs", nargs="+", help="run folders, runs/<script>__<env>__seed<k>__<time>")
     parser.add_argument("--out", default="compare.png", help="the PNG to write")
     args = parser.parse_args(argv)
     try:

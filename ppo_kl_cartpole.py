@@ -98,6 +98,9 @@ class Config:
     """print a progress line every this many updates"""
     gifs: bool = True
     """write before.gif (untrained policy) and after.gif (trained policy) to the run folder"""
+    tensorboard: bool = False
+    """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
+    names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
     curves: bool = True
     """draw curve.png (returns and the update's diagnostics against env steps) after training"""
     eval_episodes: int = 10
@@ -114,6 +117,7 @@ class Config:
     """train on the GPU if there is one (CartPole's tiny networks are faster on the CPU)"""
 
     def __post_init__(self):
+        common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
         for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches",
                      "hidden", "print_every", "eval_episodes", "threads", "learning_rate",
                      "reward_scale", "d_targ", "beta_init"):
@@ -416,12 +420,15 @@ def train(cfg: Config):
                   interrupted=interrupted)
     if interrupted:
         return result
-    print(f"trained {global_step} steps, {len(episode_returns)} episodes in "
-          f"{time.time() - start_time:.1f}s; model: {run_dir / 'model.pt'}", flush=True)
+    elapsed = time.time() - start_time
+    print(f"trained {global_step} steps, {len(episode_returns)} episodes in {elapsed:.1f}s; "
+          f"model: {run_dir / 'model.pt'}", flush=True)
 
     # --- after training: the learning curve, greedy evaluation and GIFs ---
     if cfg.curves:
         print(f"curve: {plots.draw_run(run_dir, threshold, solved_step)}", flush=True)
+    if cfg.tensorboard:
+        plots.to_tensorboard(run_dir, sps=global_step / elapsed)
     returns = common.evaluate(cfg.env_id, greedy(policy, device), cfg.eval_episodes, cfg.eval_seed)
     print(f"greedy evaluation over {cfg.eval_episodes} episodes: mean {np.mean(returns):.1f}, "
           f"min {min(returns):.0f}", flush=True)

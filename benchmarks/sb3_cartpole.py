@@ -1,6 +1,6 @@
 """Stable-Baselines3 PPO / A2C on CartPole-v1 with the rl-baselines3-zoo hyperparameters.
 
-The peer in our benchmark (../shared/BENCHMARK.md). Prints the same `solved:`
+The peer in our benchmark (its criterion: benchmarks/bench_cartpole.py). Prints the same `solved:`
 line as our scripts, judged by the same criterion: the mean return of the last
 20 finished training episodes (all envs together) reaches 475.
 
