@@ -186,7 +186,7 @@ def compare(run_dirs, out):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("runs", nargs="+", help="run folders, runs/<script>__<env>__seed<k>__<time>")
+    parser.add_argument("runs", nargs="+", help="run folders, e.g. runs/ppo_cartpole__*")
     parser.add_argument("--out", default="compare.png", help="the PNG to write")
     args = parser.parse_args(argv)
     try:

@@ -187,3 +187,31 @@ def test_ctrl_c_during_eval(script, tmp_path):
                                "--eval-episodes", 100_000, after="playing")
     assert code == 130, (out, err)
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+
+
+def test_ctrl_c_during_watch(tmp_path):
+    """--watch with a display: each return printed as it ends, then Ctrl-C ends it in one line.
+    SDL's dummy driver stands in for the screen (a DISPLAY is set, so the script allows --watch)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    import ppo_cartpole
+
+    run = ppo_cartpole.train(small(ppo_cartpole, tmp_path, total_timesteps=256, stop_when_solved=False,
+                                   gifs=False, curves=False, eval_episodes=1))["run_dir"]
+    env = dict(os.environ, DISPLAY=":99", SDL_VIDEODRIVER="dummy", PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, str(ROOT / "ppo_cartpole.py"), "--eval", str(run), "--watch",
+                             "--eval-episodes", "100000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, cwd=ROOT)
+    seen = []
+    for line in proc.stdout:
+        seen.append(line)
+        if line.startswith("episode 2/"):
+            break
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert "Ctrl-C stops" in "".join(seen) and seen[-1].startswith("episode 2/100000: return")
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1

@@ -291,6 +291,15 @@ def test_checkpoint_round_trip_and_bad_files(tmp_path):
         common.load_checkpoint(tmp_path / "empty")
 
 
+def test_save_checkpoint_flushes_to_disk_before_the_rename(tmp_path, monkeypatch):
+    calls = []
+    real_fsync, real_replace = common.os.fsync, common.os.replace
+    monkeypatch.setattr(common.os, "fsync", lambda fd: (calls.append("fsync"), real_fsync(fd))[1])
+    monkeypatch.setattr(common.os, "replace", lambda a, b: (calls.append("replace"), real_replace(a, b))[1])
+    common.save_checkpoint(dict(w=torch.ones(2)), tmp_path / "m.pt")
+    assert calls == ["fsync", "replace"]
+
+
 def test_env_errors_are_user_errors():
     with pytest.raises(common.UserError, match="unknown environment"):
         common.evaluate("NoSuchEnv-v0", lambda obs: 0, 1, 0)
