@@ -14,6 +14,14 @@ def run_script(script, *args, timeout=300, cwd=None):
                           text=True, timeout=timeout, cwd=cwd or ROOT, env=env)
 
 
+def ctrl_c_default():
+    """In the child: Ctrl-C (SIGINT) does what it does in a terminal. A shell that starts a
+    job in the background (`cmd &`) makes its children ignore SIGINT, tests included."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupt(script, *args, after):
     """Start `python <script> args...`, send Ctrl-C (SIGINT) once a stdout line starts
     with `after`; return (returncode, stdout, stderr)."""
@@ -22,7 +30,7 @@ def interrupt(script, *args, after):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     env.pop("DISPLAY", None)
     proc = subprocess.Popen([sys.executable, str(ROOT / script), *map(str, args)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT, preexec_fn=ctrl_c_default)
     seen = []
     for line in proc.stdout:  # wait until training is under way
         seen.append(line)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from conftest import ROOT, interrupt, run_script
+from conftest import ROOT, ctrl_c_default, interrupt, run_script
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
            if (ROOT / f"{name}.py").exists()]
@@ -204,7 +204,7 @@ def test_ctrl_c_during_watch(tmp_path):
     env = dict(os.environ, DISPLAY=":99", SDL_VIDEODRIVER="dummy", PYTHONUNBUFFERED="1")
     proc = subprocess.Popen([sys.executable, str(ROOT / "ppo_cartpole.py"), "--eval", str(run), "--watch",
                              "--eval-episodes", "100000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env, cwd=ROOT)
+                            text=True, env=env, cwd=ROOT, preexec_fn=ctrl_c_default)
     seen = []
     for line in proc.stdout:
         seen.append(line)
