@@ -404,7 +404,7 @@ def play(cfg: Config):
 
 def main(argv=None):
     """python actor_critic_cartpole.py [flags]: train (then --watch), or --eval a saved model."""
-    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
+    cfg = common.parse_config(Config, argv, description=" ".join(__doc__.split("\n\n")[0].split()))
     with common.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         if cfg.eval:
             play(cfg)

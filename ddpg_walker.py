@@ -112,6 +112,9 @@ class Config:
         common.check(self.expl_noise >= 0, f"--expl-noise must be >= 0, got {self.expl_noise}")
         common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
         common.check(0 < self.tau <= 1, f"--tau must be in (0, 1], got {self.tau}")
+        common.check(self.resume or self.total_timesteps > self.start_steps,
+                     f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
+                     f"({self.start_steps}): learning starts after the warm-up")
 
 
 # =============================================================================
@@ -457,7 +460,7 @@ def play(cfg: Config):
 
 def main(argv=None):
     """python ddpg_walker.py [flags]: train (then --watch), or --eval a saved model."""
-    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
+    cfg = common.parse_config(Config, argv, description=" ".join(__doc__.split("\n\n")[0].split()))
     with common.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         if cfg.eval:
             play(cfg)

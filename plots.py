@@ -159,7 +159,7 @@ def curve_of(run_dir):
 
 def compare(run_dirs, out):
     """Overlay runs: per script, the mean over its runs and a band from lowest to highest."""
-    groups = {}
+    groups = {}  # script -> its runs' curves
     for run_dir in map(Path, run_dirs):
         if not ((run_dir / "progress.csv").exists() or (run_dir / "evaluations.csv").exists()):
             print(f"error: {run_dir} is not a run folder (no progress.csv or evaluations.csv)",
@@ -168,11 +168,13 @@ def compare(run_dirs, out):
         groups.setdefault(run_dir.name.split("__")[0], []).append(curve_of(run_dir))
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
+    last = max(steps.max() for curves in groups.values() for steps, _, _ in curves)
+    grid = np.linspace(0, last, 200)  # one x axis for all
     for color, (script, curves) in enumerate(groups.items()):
-        grid = np.linspace(0, max(steps.max() for steps, _, _ in curves), 200)
         # A run that stopped early (solved) keeps its last value to the end of the grid.
         ys = np.array([np.interp(grid, steps, np.nan_to_num(y, nan=0.0)) for steps, y, _ in curves])
-        ax.plot(grid, ys.mean(0), color=f"C{color}", lw=2, label=f"{script} ({len(curves)} runs)")
+        runs = f"{len(curves)} run{'s' if len(curves) > 1 else ''}"
+        ax.plot(grid, ys.mean(0), color=f"C{color}", lw=2, label=f"{script} ({runs})")
         if len(curves) > 1:
             ax.fill_between(grid, ys.min(0), ys.max(0), color=f"C{color}", alpha=0.2)
     ax.set_xlabel("env steps")
@@ -185,7 +187,8 @@ def compare(run_dirs, out):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("runs", nargs="+", help="run folders, e.g. runs/ppo_cartpole__*")
     parser.add_argument("--out", default="compare.png", help="the PNG to write")
     args = parser.parse_args(argv)

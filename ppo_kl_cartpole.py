@@ -63,8 +63,9 @@ class Config:
     gamma: float = 0.99
     """discount factor (0.98 .. 0.999); 0.99 looks about 100 steps ahead"""
     reward_scale: float = 0.05
-    """rewards are multiplied by this for learning (logged returns are not): V's targets
-    stay near 1, so the critic fits them within a few steps (1 = off; 0.01 .. 1)"""
+    """rewards are multiplied by this for learning (logged returns are not): V's targets,
+    discounted returns up to ~100, become at most ~5, which the critic fits within a few
+    steps (1 = off; 0.01 .. 1)"""
     lam: float = 0.95
     """GAE lambda: 0 = one-step TD advantages (low variance), 1 = Monte Carlo (no bias);
     usually 0.9 .. 0.97"""
@@ -458,7 +459,7 @@ def play(cfg: Config):
 
 def main(argv=None):
     """python ppo_kl_cartpole.py [flags]: train (then --watch), or --eval a saved model."""
-    cfg = common.parse_config(Config, argv, description=__doc__.split("\n")[0])
+    cfg = common.parse_config(Config, argv, description=" ".join(__doc__.split("\n\n")[0].split()))
     with common.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         if cfg.eval:
             play(cfg)

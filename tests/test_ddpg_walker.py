@@ -72,7 +72,7 @@ def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
     real_add = ddpg.ReplayBuffer.add
     monkeypatch.setattr(ddpg.ReplayBuffer, "add", lambda self, o, a, r, no, terminated: (
         stored.append(terminated), real_add(self, o, a, r, no, terminated))[1])
-    ddpg.train(ddpg.Config(env_id="InvertedPendulum-v5", total_timesteps=40, start_steps=40, batch_size=32,
+    ddpg.train(ddpg.Config(env_id="InvertedPendulum-v5", total_timesteps=40, start_steps=32, batch_size=32,
                            eval_every=10**6,
                            print_every=10**6, gifs=False, run_dir=str(tmp_path), cuda=False))
     assert len(stored) == 40
@@ -245,6 +245,7 @@ def test_same_seed_same_evaluations(tmp_path):
     (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
     (["--tau", "0"], "--tau must be in (0, 1]"),
     (["--start-steps", "0"], "--start-steps must be at least --batch-size"),
+    (["--total-timesteps", "100", "--start-steps", "25000"], "must exceed --start-steps"),
     (["--buffer-size", "10000000000", "--total-timesteps", "100000000000"],
      "cannot allocate a replay buffer"),
     (["--eval", "{tmp}"], "no checkpoint at"),
@@ -255,8 +256,8 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"not a checkpoint")
     args = [a.format(tmp=tmp_path, file=bad) for a in args]
-    if "--total-timesteps" not in args:
-        args += ["--total-timesteps", "50"]
+    if "--total-timesteps" not in args:  # small budgets, so that a valid run would be short
+        args += ["--total-timesteps", "300"] + ([] if "--start-steps" in args else ["--start-steps", "256"])
     p = run_script("ddpg_walker.py", *args, "--run-dir", tmp_path, timeout=120)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
@@ -304,7 +305,7 @@ def test_help_of_the_real_script():
 
 def test_ctrl_c_during_eval(tmp_path):
     first = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
-                             start_steps=300, eval_every=300, eval_episodes=1, gifs=False))
+                             start_steps=200, eval_every=300, eval_episodes=1, gifs=False))
     code, out, err = interrupt("ddpg_walker.py", "--eval", first["run_dir"] / "best.pt",
                                "--eval-episodes", 100_000, after="playing")
     assert code == 130, (out, err)
