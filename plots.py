@@ -53,7 +53,8 @@ def draw_run(run_dir, solved_return=None, solved_step=None):
     if (run_dir / "evaluations.csv").exists():  # DDPG
         fig = draw_ddpg(plt, read_csv(run_dir / "evaluations.csv"))
     else:
-        fig = draw_cartpole(plt, read_csv(run_dir / "episodes.csv"),
+        episodes = run_dir / "episodes.csv"  # absent when no episode has finished yet
+        fig = draw_cartpole(plt, read_csv(episodes) if episodes.exists() else {},
                             read_csv(run_dir / "progress.csv"), solved_return, solved_step)
     fig.axes[0].set_title(run_dir.name, fontsize=8)
     fig.tight_layout()

@@ -64,3 +64,10 @@ def test_curve_is_not_drawn_blank_for_a_ppo_kl_run(tmp_path):
                              run_dir=str(tmp_path), print_every=10**6))["run_dir"]
     assert_curve_drawn(run / "curve.png")
     assert iio.imread(run / "curve.png").shape[-1] in (3, 4)
+
+
+def test_curve_of_a_run_in_which_no_episode_finished(tmp_path):
+    """One short rollout of Acrobot (its episodes run to 500 steps): no episodes.csv, a curve."""
+    run = ppo.train(ppo.Config(env_id="Acrobot-v1", total_timesteps=256, gifs=False,
+                               eval_episodes=1, run_dir=str(tmp_path), print_every=10**6))["run_dir"]
+    assert not (run / "episodes.csv").exists() and (run / "curve.png").exists()
