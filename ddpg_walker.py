@@ -9,12 +9,17 @@ and an evaluation every 5000 steps over 10 episodes. The loop, top to bottom:
     act      random for start_steps steps, then mu(s) + Gaussian noise
     store    (s, a, r, s', terminated) in the replay buffer; a time-limit
              truncation is NOT terminal, so its target still bootstraps
-    update   one critic and one actor step on a random minibatch, then the
+    learn    one critic and one actor step on a random minibatch, then the
              targets move a fraction tau toward the networks
-    evaluate every eval_every steps: 10 episodes of mu(s) without noise; the run folder
-             keeps model.pt, best.pt (the best evaluation so far), best.gif and curve.png
+    evaluate every eval_every steps (once only during the warm-up): 10 episodes of mu(s)
+             without noise
+
+Around it, plumbing a first reading can skip: the run folder keeps evaluations.csv,
+episodes.csv, model.pt, best.pt and best.gif (the best evaluation so far) and curve.png, and
+every checkpoint_every steps a checkpoint.pt from which --resume continues the very same run.
 
     python ddpg_walker.py                         # 1M steps: hours on a CPU, less on a GPU
+    python ddpg_walker.py --resume runs/<run>     # continue a stopped or killed run exactly
     python ddpg_walker.py --eval runs/<run>/best.pt --watch   # replay a saved actor
 """
 
@@ -22,8 +27,11 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import signal
+import threading
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -39,31 +47,34 @@ import plots
 class Config:
     # --- experiment ---
     env_id: str = "Walker2d-v5"
-    """gymnasium id of an env with Box observations and Box actions (Walker2d-v5, Hopper-v5, ...)"""
+    """gymnasium id of a MuJoCo env with Box actions (Walker2d-v5, Hopper-v5, HalfCheetah-v5,
+    ...)"""
     seed: int = 0
     """seeds torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
     total_timesteps: int = 1_000_000
     """env steps to train for (the tutorial and the TD3 paper: 1M)"""
     start_steps: int = 25_000
     """uniformly random actions for this many steps before the actor acts and learning
-    starts (TD3 paper: 25k; at least batch_size)"""
+    starts (the TD3 authors' code: 25k; their paper: 1k on Walker2d; at least batch_size)"""
 
     # --- DDPG ---
     expl_noise: float = 0.1
     """std of the Gaussian exploration noise, as a fraction of the action range's half-width
     (0.1 .. 0.3)"""
     batch_size: int = 256
-    """transitions per update (64 .. 256)"""
+    """transitions per update (64 .. 256; DDPG paper: 64; the TD3 authors' OurDDPG.py: 256)"""
     gamma: float = 0.99
     """discount factor (0.98 .. 0.995)"""
     tau: float = 0.005
     """target networks move this fraction toward the networks after every update (0.001 .. 0.01)"""
     actor_lr: float = 3e-4
-    """Adam step size of the actor (tutorial: 1e-4; TD3's DDPG: 3e-4)"""
+    """Adam step size of the actor (DDPG paper and tutorial: 1e-4; OurDDPG.py: 3e-4)"""
     critic_lr: float = 3e-4
-    """Adam step size of the critic (tutorial: 1e-3 with weight decay; TD3's DDPG: 3e-4)"""
+    """Adam step size of the critic (DDPG paper and tutorial: 1e-3 with weight decay;
+    OurDDPG.py: 3e-4)"""
     hidden: int = 256
-    """units in each of the two hidden layers (tutorial: 400 and 300; TD3, CleanRL: 256)"""
+    """units in each of the two hidden layers (DDPG paper and tutorial: 400 and 300;
+    OurDDPG.py and CleanRL: 256)"""
     buffer_size: int = 1_000_000
     """replay buffer capacity; the oldest transitions are overwritten"""
 
@@ -71,11 +82,15 @@ class Config:
     run_dir: str = "runs"
     """parent folder of the run folder <script>__<env>__seed<k>__<time>/"""
     eval_every: int = 5000
-    """evaluate (and save the model) every this many env steps"""
+    """evaluate (and save model.pt) every this many env steps; during the random warm-up only
+    once, as the untrained baseline"""
     eval_episodes: int = 10
     """episodes per evaluation, without exploration noise"""
     eval_seed: int = 10_000
     """seed of the evaluation env, kept apart from the training seed"""
+    checkpoint_every: int = 25_000
+    """write checkpoint.pt (networks, optimizers, replay buffer, random generators, logs) every
+    this many env steps and on Ctrl-C; --resume continues from it"""
     print_every: int = 1000
     """print a progress line every this many env steps"""
     gifs: bool = True
@@ -91,8 +106,12 @@ class Config:
     eval: str | None = None
     """a saved model.pt or best.pt, or a run folder (its model.pt): skip training, play
     eval_episodes episodes without noise"""
+    gif: str | None = None
+    """with --eval: write one episode of the saved actor to this GIF file instead (no display
+    needed)"""
     resume: str | None = None
-    """a saved model.pt: continue that run's training from its saved step (see the README)"""
+    """a run folder: continue that run exactly where its checkpoint.pt left it, in the same
+    folder and with its saved settings (--total-timesteps may extend it)"""
     cuda: bool = True
     """train on the GPU when there is one"""
     threads: int = 1
@@ -102,7 +121,8 @@ class Config:
     def __post_init__(self):
         common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
         for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every",
-                     "eval_episodes", "print_every", "actor_lr", "critic_lr", "threads"):
+                     "eval_episodes", "checkpoint_every", "print_every", "actor_lr", "critic_lr",
+                     "threads"):
             common.check(getattr(self, name) > 0,
                          f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
         # The first update samples batch_size transitions: the warm-up must have stored that many.
@@ -115,6 +135,10 @@ class Config:
         common.check(self.resume or self.total_timesteps > self.start_steps,
                      f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
                      f"({self.start_steps}): learning starts after the warm-up")
+        common.check(not (self.eval and self.resume),
+                     "--eval plays a saved actor and --resume continues training: pass one")
+        common.check(not self.gif or self.eval,
+                     "--gif writes a GIF of a saved actor: it needs --eval")
 
 
 # =============================================================================
@@ -237,7 +261,7 @@ def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_op
 
 
 # =============================================================================
-# Training
+# Helpers of the loop: acting without noise, making the env and the networks
 # =============================================================================
 
 
@@ -249,20 +273,26 @@ def deterministic(actor, device):
     return act
 
 
-# GIFs and --watch look through the model's "track" camera, which follows the walker
-# (gymnasium's default free camera stays put, and a walking agent leaves the picture).
-# Models without such a camera (InvertedPendulum) keep the default view.
+# GIFs look through the model's "track" camera, which follows the walker (gymnasium's
+# default free camera stays put, and a walking agent leaves the picture). Models without
+# such a camera (InvertedPendulum) keep the default view. 1000 steps -> every 4th frame,
+# 250 frames, at half size: a GIF of a few MB.
 CAMERA = dict(camera_name="track")
+GIF = dict(max_frames=250, every=4, scale=2)
 
 
 def make_continuous_env(env_id):
-    """The env, or a UserError if its actions are not a Box."""
+    """The env, or a UserError if it is not a MuJoCo env with Box actions."""
     with common.env_errors(env_id):
         env = gym.make(env_id)
     if not isinstance(env.action_space, gym.spaces.Box):
         env.close()
         raise common.UserError(f"{env_id} has a {type(env.action_space).__name__} action space; "
                                "DDPG needs continuous (Box) actions")
+    if not hasattr(env.unwrapped, "data"):  # checkpoints save MuJoCo's simulator state
+        env.close()
+        raise common.UserError(f"{env_id} is not a MuJoCo env; this script trains MuJoCo tasks "
+                               "(Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5, ...)")
     return env
 
 
@@ -278,15 +308,211 @@ def build(obs_dim, act_dim, low, high, cfg, device):
     return actor, critic, actor_target, critic_target, actor_opt, critic_opt
 
 
+# =============================================================================
+# Plumbing of the loop: logs, saved models, checkpoints, Ctrl-C. A first reading can
+# skip to train() below; each function here says in its first line what it does.
+# =============================================================================
+
+
+def after_step(step, cfg, run_dir, actor, episodes, evaluations, losses, timer):
+    """The logs of one env step: a finished episode's row in episodes.csv, a progress line
+    every print_every steps; after an evaluation its row in evaluations.csv, model.pt,
+    best.pt and best.gif when it is the best so far, curve.png and TensorBoard."""
+    if step > cfg.start_steps:  # the learning phase's steps/s: from this process's first update
+        timer.setdefault("learning_since", (step, time.time()))
+    if episodes and episodes[-1][0] == step:
+        common.append_csv(run_dir / "episodes.csv", episode_row(*episodes[-1]))
+    if step % cfg.print_every == 0:
+        print(progress_line(step, cfg, episodes, losses, timer), flush=True)
+    if not evaluations or evaluations[-1][0] != step:
+        return
+    _, mean, std = evaluations[-1]
+    common.append_csv(run_dir / "evaluations.csv", evaluation_row(evaluations[-1], episodes))
+    print(f"evaluation at step {step}: {mean:.1f} +- {std:.1f} over {cfg.eval_episodes} "
+          f"episodes", flush=True)
+    save_model(run_dir / "model.pt", actor, cfg, step)
+    if mean > max((m for _, m, _ in evaluations[:-1]), default=-float("inf")):  # a new best
+        save_model(run_dir / "best.pt", actor, cfg, step)
+        if cfg.gifs:
+            common.record_gif(cfg.env_id, deterministic(actor, actor.l1.weight.device),
+                              run_dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
+    if cfg.curves:
+        plots.draw_run(run_dir)  # rewritten at every evaluation: open it any time
+    if cfg.tensorboard:
+        plots.to_tensorboard(run_dir, sps=timer["rate"])
+
+
+def episode_row(step, ep_return):
+    """An episodes.csv row, as the CartPole scripts write it."""
+    return {"global_step": step, "return": ep_return}
+
+
+def evaluation_row(evaluation, episodes):
+    """An evaluations.csv row: the evaluation and the training return before it."""
+    step, mean, std = evaluation
+    done = [ret for s, ret in episodes if s <= step]
+    return dict(global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
+                train_return_mean10=float(np.mean(done[-10:])) if done else float("nan"))
+
+
 def clock(seconds):
     """1234.5 -> '0:20:34'."""
     return time.strftime("%H:%M:%S", time.gmtime(seconds)).lstrip("0").lstrip(":") or "0"
 
 
+def progress_line(step, cfg, episodes, losses, timer):
+    """'step 30000  151 steps/s  rest of the budget 1:47:02  return(10) ...' (plumbing)."""
+    now = time.time()
+    if step > cfg.start_steps and timer["step"] > cfg.start_steps:  # steps/s since last line
+        timer["rate"] = (step - timer["step"]) / (now - timer["time"])
+        left = (cfg.total_timesteps - step) / timer["rate"]
+        speed = f"{timer['rate']:5.0f} steps/s  rest of the budget {clock(left)}"
+    else:
+        speed = "warm-up (random actions)"
+    timer.update(step=step, time=now)
+    recent = f"{np.mean([r for _, r in episodes[-10:]]):8.1f}" if episodes else "     n/a"
+    loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
+                 if losses is not None else "")
+    return (f"step {step:>8}  {speed}  return(10) {recent}{loss_text}  "
+            f"{clock(now - timer['start'])}")
+
+
+def save_model(path, actor, cfg, step):
+    """The actor and what --eval needs to rebuild it (small; checkpoint.pt has the rest)."""
+    common.save_checkpoint(dict(
+        script="ddpg_walker", actor=actor.state_dict(), config=asdict(cfg), global_step=step,
+        obs_dim=actor.l1.in_features, act_dim=actor.l3.out_features,
+        low=(actor.bias - actor.scale).tolist(), high=(actor.bias + actor.scale).tolist()), path)
+
+
+NETS = ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic_opt")
+BUFFER = ("obs", "action", "reward", "next_obs", "not_done")
+
+
+def save_checkpoint(run_dir, cfg, nets, buffer, env, loop):
+    """checkpoint.pt: everything that decides what the run does next, so that --resume goes
+    on exactly as if it had never stopped. `loop` holds the loop's own variables."""
+    filled = slice(0, buffer.count)  # only the filled part of the buffer: compact early on
+    common.save_checkpoint(dict(
+        script="ddpg_walker", config=asdict(cfg), **{k: n.state_dict() for k, n in zip(NETS, nets)},
+        buffer={k: getattr(buffer, k)[filled].cpu().clone() for k in BUFFER},
+        buffer_ptr=buffer.ptr, buffer_count=buffer.count,
+        torch_rng=torch.get_rng_state(),  # the exploration noise and the minibatch draws
+        cuda_rng=torch.cuda.get_rng_state() if buffer.obs.is_cuda else None,
+        action_space_rng=env.action_space.np_random.bit_generator.state,  # the warm-up actions
+        env=env_state(env),
+        **{**loop, "obs": torch.as_tensor(loop["obs"])}), run_dir / "checkpoint.pt")
+
+
+def load_checkpoint(run_dir, nets, buffer, env):
+    """Put the state saved by save_checkpoint back; return the loop's own variables."""
+    ckpt = common.load_checkpoint(run_dir / "checkpoint.pt",
+                                  required=NETS + ("buffer", "env", "torch_rng", "global_step"))
+    for key, obj in zip(NETS, nets):
+        common.load_weights(obj, ckpt[key], run_dir / "checkpoint.pt")
+    n = ckpt["buffer_count"]
+    for key in BUFFER:
+        getattr(buffer, key)[:n] = ckpt["buffer"][key].to(buffer.obs.device)
+    # A run extended by --total-timesteps may get a larger buffer: it fills on after row n.
+    buffer.ptr, buffer.count = (ckpt["buffer_ptr"] if n == buffer.size else n), n
+    torch.set_rng_state(ckpt["torch_rng"])
+    if ckpt["cuda_rng"] is not None and buffer.obs.is_cuda:
+        torch.cuda.set_rng_state(ckpt["cuda_rng"])
+    env.action_space.np_random.bit_generator.state = ckpt["action_space_rng"]
+    set_env_state(env, ckpt["env"])
+    loop = {k: ckpt[k] for k in ("global_step", "ep_return", "episodes", "evaluations")}
+    return dict(loop, obs=ckpt["obs"].numpy())
+
+
+def env_state(env):
+    """The env mid-episode: MuJoCo's whole simulator state (positions, velocities, the
+    solver's warm start), the time limit's step count, and the generator used at reset."""
+    import mujoco
+
+    sim, what = env.unwrapped, mujoco.mjtState.mjSTATE_INTEGRATION
+    state = np.empty(mujoco.mj_stateSize(sim.model, what))
+    mujoco.mj_getState(sim.model, sim.data, state, what)
+    return dict(mujoco=torch.from_numpy(state), rng=sim.np_random.bit_generator.state,
+                elapsed_steps=env.get_wrapper_attr("_elapsed_steps"))
+
+
+def set_env_state(env, saved):
+    import mujoco
+
+    sim = env.unwrapped
+    mujoco.mj_setState(sim.model, sim.data, saved["mujoco"].numpy(),
+                       mujoco.mjtState.mjSTATE_INTEGRATION)
+    env.set_wrapper_attr("_elapsed_steps", saved["elapsed_steps"])
+    sim.np_random.bit_generator.state = saved["rng"]
+
+
+# Settings --resume may change: how long to go on, and what is shown or written. The rest
+# decide the run's numbers and come from its checkpoint.
+MAY_CHANGE_ON_RESUME = ("total_timesteps", "print_every", "gifs", "tensorboard", "curves",
+                        "watch", "resume", "run_dir")
+
+
+def config_to_resume(cfg):
+    """The saved run's Config, with the flags of MAY_CHANGE_ON_RESUME that this command set.
+    A learning setting set to something else than the saved run's is refused."""
+    path = Path(cfg.resume) / "checkpoint.pt"
+    saved = common.load_checkpoint(path, required=("config", "global_step"))
+    if saved.get("script") != "ddpg_walker":
+        raise common.UserError(f"{path} is not a checkpoint of ddpg_walker.py")
+    defaults = {f.name: f.default for f in dataclasses.fields(Config)}
+    kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}
+    for name, value in asdict(cfg).items():
+        if name in MAY_CHANGE_ON_RESUME or value in (defaults[name], kept[name]):
+            continue
+        raise common.UserError(f"--resume continues the run with its saved settings: --"
+                               f"{name.replace('_', '-')} {value} differs from the saved "
+                               f"{kept[name]}")
+    changed = {name: getattr(cfg, name) for name in MAY_CHANGE_ON_RESUME
+               if getattr(cfg, name) != defaults[name]}
+    cfg = Config(**{**kept, **changed})
+    if cfg.total_timesteps <= saved["global_step"]:
+        raise common.UserError(f"{cfg.resume} already ran {saved['global_step']} steps; pass a "
+                               f"larger --total-timesteps to go on")
+    return cfg
+
+
+class CtrlC:
+    """While training, a first Ctrl-C only sets `pressed`: the loop finishes its step, where
+    nothing is half done, and stops there with a checkpoint. A second Ctrl-C stops at once
+    (the last checkpoint is kept)."""
+
+    def __init__(self):
+        self.pressed = False
+        self.active = (threading.current_thread() is threading.main_thread()
+                       and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+    def __enter__(self):
+        if self.active:
+            signal.signal(signal.SIGINT, self.handler)
+        return self
+
+    def handler(self, signum, frame):
+        if self.pressed:
+            raise KeyboardInterrupt
+        self.pressed = True
+
+    def __exit__(self, *exc):
+        if self.active:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+# =============================================================================
+# Training
+# =============================================================================
+
+
 def train(cfg: Config):
-    """Train DDPG with `cfg`. Returns a dict: run_dir, global_step, evaluations (list of
-    (step, mean, std)), episode_returns, steps_per_second (learning phase) and interrupted."""
+    """Train DDPG with `cfg` (or continue the run cfg.resume). Returns a dict: run_dir,
+    global_step, evaluations (list of (step, mean, std)), episodes (list of (step, return)),
+    steps_per_second (learning phase) and interrupted."""
     start_time = time.time()
+    if cfg.resume:
+        cfg = config_to_resume(cfg)  # the saved run's settings
     # --- seeding and setup ---
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     torch.manual_seed(cfg.seed)  # the networks' init
@@ -297,127 +523,96 @@ def train(cfg: Config):
     nets = build(obs_dim, act_dim, low, high, cfg, device)
     actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets
     untrained = copy.deepcopy(actor)  # before.gif is drawn from these weights after training
-    first_step = 0
-    if cfg.resume:
-        first_step = load(cfg.resume, nets)["global_step"]
-        for opt, lr in ((actor_opt, cfg.actor_lr), (critic_opt, cfg.critic_lr)):
-            opt.param_groups[0]["lr"] = lr  # this run's flags win over the saved learning rates
-        print(f"resumed {cfg.resume} at step {first_step}; the replay buffer starts empty and is "
-              f"refilled by the loaded actor for start_steps steps", flush=True)
-    # A resumed run continues with fresh randomness (noise, minibatches, env) instead of
-    # replaying the first run's: it seeds everything with seed + the step it resumes at.
-    run_seed = cfg.seed + first_step
-    torch.manual_seed(run_seed)
-    env.action_space.seed(run_seed)
+    torch.manual_seed(cfg.seed)  # the noise and the minibatches
+    env.action_space.seed(cfg.seed)  # the random warm-up actions
     try:
         buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
     except (MemoryError, RuntimeError) as e:  # e.g. --buffer-size far beyond this machine's memory
         raise common.UserError(f"cannot allocate a replay buffer of {cfg.buffer_size} transitions: "
                                f"{str(e).splitlines()[0]}") from None
-    run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
-    print(f"run folder: {run_dir}  (device: {device})", flush=True)
     noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32,
                                 device=device)
     low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
+    obs, _ = env.reset(seed=cfg.seed)
+    global_step, ep_return, episodes, evaluations, losses = 0, 0.0, [], [], None
+    if cfg.resume:  # the same run goes on: weights, buffer, generators, env, logs as saved
+        run_dir = Path(cfg.resume)
+        loop = load_checkpoint(run_dir, nets, buffer, env)
+        global_step, obs, ep_return = loop["global_step"], loop["obs"], loop["ep_return"]
+        episodes, evaluations = loop["episodes"], loop["evaluations"]
+        rewind_logs(run_dir, episodes, evaluations)
+        print(f"resumed {run_dir} at step {global_step} of {cfg.total_timesteps}", flush=True)
+    else:
+        run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
+        print(f"run folder: {run_dir}  (device: {device})", flush=True)
+    timer = dict(start=start_time, time=time.time(), step=global_step, rate=float("nan"))
+    first_step = global_step
 
-    def save(name):
-        common.save_checkpoint(dict(
-            actor=actor.state_dict(), critic=critic.state_dict(),
-            actor_target=actor_target.state_dict(), critic_target=critic_target.state_dict(),
-            actor_opt=actor_opt.state_dict(), critic_opt=critic_opt.state_dict(),
-            config=asdict(cfg), obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(),
-            high=high.tolist(), global_step=global_step), run_dir / name)
-
-    # --- bookkeeping ---
-    episode_returns, evaluations = [], []
-    ep_return, losses, best = 0.0, None, -float("inf")
-    learn_start_time, learn_start_step = None, None
-    global_step, interrupted = first_step, False
-    warmup_until = first_step + cfg.start_steps
-    obs, _ = env.reset(seed=run_seed)
-
-    try:
-        for global_step in range(first_step + 1, cfg.total_timesteps + 1):
-            # --- act ---
-            if global_step <= warmup_until and not cfg.resume:
-                action = env.action_space.sample()  # a random warm-up fills the buffer widely
-            else:
-                with torch.no_grad():
-                    a = actor(torch.as_tensor(obs, dtype=torch.float32, device=device))
-                    a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian noise
-                    action = torch.clamp(a, low_t, high_t).cpu().numpy()
-            next_obs, reward, terminated, truncated, _ = env.step(action)
-            # Stored with terminated, not truncated: see ReplayBuffer.add.
-            buffer.add(obs, action, reward, next_obs, terminated)
-            # obs = next_obs: the transition above is stored, the next action starts from here.
-            obs = next_obs
-            ep_return += float(reward)
-            if terminated or truncated:
-                episode_returns.append(ep_return)
-                ep_return = 0.0
-                obs, _ = env.reset()
-
-            # --- learn: one critic and one actor update per env step after the warm-up ---
-            if global_step > warmup_until:
-                if learn_start_time is None:
-                    learn_start_time, learn_start_step = time.time(), global_step
-                losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt,
-                                     critic_opt, buffer.sample(cfg.batch_size), cfg)
-
-            # --- logging ---
-            if global_step % cfg.print_every == 0:
-                elapsed = time.time() - start_time
-                if learn_start_time is not None and global_step > learn_start_step:
-                    rate = (global_step - learn_start_step) / (time.time() - learn_start_time)
-                    left = (cfg.total_timesteps - global_step) / rate
-                    speed = f"{rate:5.0f} steps/s  rest of the budget {clock(left)}"
+    with CtrlC() as ctrl_c:
+        try:
+            for global_step in range(first_step + 1, cfg.total_timesteps + 1):
+                learning = global_step > cfg.start_steps  # after the random warm-up
+                # --- act ---
+                if not learning:
+                    action = env.action_space.sample()  # a random warm-up fills the buffer widely
                 else:
-                    speed = "warm-up (random actions)"
-                recent = f"{np.mean(episode_returns[-10:]):8.1f}" if episode_returns else "     n/a"
-                loss_text = (f"  critic_loss {losses[0].item():8.3f}  "
-                             f"actor_loss {losses[1].item():8.2f}" if losses is not None else "")
-                print(f"step {global_step:>8}  {speed}  return(10) {recent}{loss_text}  "
-                      f"{clock(elapsed)}", flush=True)
-            # --- evaluation, checkpoints, curve; the best model so far and its GIF ---
-            if global_step % cfg.eval_every == 0:
-                returns = common.evaluate(cfg.env_id, deterministic(actor, device),
-                                          cfg.eval_episodes, cfg.eval_seed)
-                evaluations.append((global_step, float(np.mean(returns)), float(np.std(returns))))
-                recent = float(np.mean(episode_returns[-10:])) if episode_returns else float("nan")
-                common.append_csv(run_dir / "evaluations.csv", dict(
-                    global_step=global_step, eval_mean=evaluations[-1][1],
-                    eval_std=evaluations[-1][2], episodes=len(episode_returns),
-                    train_return_mean10=recent))
-                print(f"evaluation at step {global_step}: {evaluations[-1][1]:.1f} +- "
-                      f"{evaluations[-1][2]:.1f} over {cfg.eval_episodes} episodes", flush=True)
-                save("model.pt")  # atomic: a crash never leaves half a model.pt
-                if evaluations[-1][1] > best:
-                    best = evaluations[-1][1]
-                    save("best.pt")
-                    if cfg.gifs:
-                        common.record_gif(cfg.env_id, deterministic(actor, device),
-                                          run_dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
-                if cfg.curves:
-                    plots.draw_run(run_dir)  # rewritten at every evaluation: open it any time
-                if cfg.tensorboard:
-                    plots.to_tensorboard(run_dir, sps=(global_step - first_step)
-                                         / (time.time() - start_time))
-    except KeyboardInterrupt:
-        interrupted = True
-        print("\ninterrupted: saving the model and the logs", flush=True)
-    finally:
-        env.close()
-        save("model.pt")
+                    with torch.no_grad():
+                        a = actor(torch.as_tensor(obs, dtype=torch.float32, device=device))
+                        a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian noise
+                        action = torch.clamp(a, low_t, high_t).cpu().numpy()
+                next_obs, reward, terminated, truncated, _ = env.step(action)
 
-    learned = global_step - (learn_start_step or global_step)
-    rate = learned / (time.time() - learn_start_time) if learned > 0 else float("nan")
+                # --- store: with terminated, not truncated (see ReplayBuffer.add) ---
+                buffer.add(obs, action, reward, next_obs, terminated)
+                obs = next_obs  # the transition is stored; the next action starts from here
+                ep_return += float(reward)
+                if terminated or truncated:
+                    episodes.append((global_step, ep_return))
+                    obs, _ = env.reset()
+                    ep_return = 0.0
+
+                # --- learn: one critic and one actor update per env step ---
+                if learning:
+                    losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt,
+                                         critic_opt, buffer.sample(cfg.batch_size), cfg)
+
+                # --- evaluate: mu(s) without noise (in the warm-up once, as a baseline) ---
+                if global_step % cfg.eval_every == 0 and (learning or not evaluations):
+                    returns = common.evaluate(cfg.env_id, deterministic(actor, device),
+                                              cfg.eval_episodes, cfg.eval_seed)
+                    evaluations.append((global_step, float(np.mean(returns)),
+                                        float(np.std(returns))))
+
+                # --- plumbing: logs, saved models, checkpoints, a Ctrl-C that waited ---
+                after_step(global_step, cfg, run_dir, actor, episodes, evaluations, losses, timer)
+                last = global_step == cfg.total_timesteps  # kept: --total-timesteps may extend it
+                if global_step % cfg.checkpoint_every == 0 or ctrl_c.pressed or last:
+                    save_checkpoint(run_dir, cfg, nets, buffer, env, dict(
+                        global_step=global_step, obs=obs, ep_return=ep_return,
+                        episodes=episodes, evaluations=evaluations))
+                if ctrl_c.pressed:
+                    raise KeyboardInterrupt
+            interrupted = False
+        except KeyboardInterrupt:
+            interrupted = True
+        finally:
+            env.close()
+
+    learned_from, since = timer.get("learning_since", (global_step, time.time()))
+    learned = global_step - learned_from
+    rate = learned / (time.time() - since) if learned > 0 else float("nan")
     result = dict(run_dir=run_dir, global_step=global_step, evaluations=evaluations,
-                  episode_returns=episode_returns, steps_per_second=rate, interrupted=interrupted)
-    print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor "
-          f"update per step, evaluations included); model: {run_dir / 'model.pt'}", flush=True)
+                  episodes=episodes, steps_per_second=rate, interrupted=interrupted)
     if interrupted:
+        saved = torch.load(run_dir / "checkpoint.pt", weights_only=True)["global_step"] \
+            if (run_dir / "checkpoint.pt").exists() else None
+        where = (f"its checkpoint is at step {saved}: continue with `python ddpg_walker.py "
+                 f"--resume {run_dir}`" if saved else "no checkpoint was written yet")
+        print(f"\ninterrupted at step {global_step}; {where}", flush=True)
         return result
+    print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor "
+          f"update per step, evaluations included); run folder: {run_dir}", flush=True)
     if cfg.gifs:
         for name, net in (("before.gif", untrained), ("after.gif", actor)):
             ret = common.record_gif(cfg.env_id, deterministic(net, device), run_dir / name,
@@ -426,48 +621,69 @@ def train(cfg: Config):
     return result
 
 
-# 1000 steps -> every 4th frame, 250 frames, at half size: a GIF of a few MB.
-GIF = dict(max_frames=250, every=4, scale=2)
-
-
-def load(path, nets):
-    """Load a checkpoint into the six (actor, critic, their targets, their optimizers)."""
-    keys = ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic_opt")
-    ckpt = common.load_checkpoint(path, required=keys + ("global_step",))
-    for key, obj in zip(keys, nets):
-        common.load_weights(obj, ckpt[key], path)
-    return ckpt
+def rewind_logs(run_dir, episodes, evaluations):
+    """On resume: rewrite the CSV logs as they were at the checkpoint. Rows a killed run
+    wrote after its last checkpoint go; the resumed run writes them again, identically."""
+    for stale in run_dir.glob("*.tmp*"):  # a write that a kill cut short
+        stale.unlink()
+    for name, rows in (("episodes.csv", [episode_row(*e) for e in episodes]),
+                       ("evaluations.csv", [evaluation_row(e, episodes) for e in evaluations])):
+        (run_dir / name).unlink(missing_ok=True)
+        for row in rows:
+            common.append_csv(run_dir / name, row)
 
 
 def play(cfg: Config):
     """--eval PATH (model.pt, best.pt or a run folder): play cfg.eval_episodes episodes
-    of the saved actor without noise."""
+    of the saved actor without noise (in a window with --watch), or with --gif write one
+    episode to a GIF file."""
     ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low",
                                                       "high", "config"))
+    if ckpt.get("script", "ddpg_walker") != "ddpg_walker":
+        raise common.UserError(f"{cfg.eval} is a model of {ckpt['script']}.py, not of "
+                               "ddpg_walker.py")
     actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"],
                   np.array(ckpt["low"]), np.array(ckpt["high"]))
     common.load_weights(actor, ckpt["actor"], cfg.eval)
-    env_id = ckpt["config"]["env_id"]
+    env_id, policy = ckpt["config"]["env_id"], deterministic(actor, torch.device("cpu"))
+    if cfg.gif:
+        print(f"recording one episode of {env_id} with {cfg.eval}", flush=True)
+        ret = common.record_gif(env_id, policy, cfg.gif, cfg.eval_seed, **GIF, **CAMERA)
+        print(f"{cfg.gif}: one episode, return {ret:.1f}", flush=True)
+        return [ret]
     print(f"playing {cfg.eval_episodes} episodes of {env_id} with {cfg.eval}"
           + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
-    returns = common.evaluate(env_id, deterministic(actor, torch.device("cpu")), cfg.eval_episodes,
-                              cfg.eval_seed, render_mode="human" if cfg.watch else None,
-                              log=cfg.watch, **(CAMERA if cfg.watch else {}))
+    returns = common.evaluate(env_id, policy, cfg.eval_episodes, cfg.eval_seed,
+                              render_mode="human" if cfg.watch else None, log=cfg.watch,
+                              **(watch_camera(env_id) if cfg.watch else {}))
     print(f"{env_id}, {cfg.eval}: returns {[round(r, 1) for r in returns]}, "
           f"mean {np.mean(returns):.1f}", flush=True)
     return returns
 
 
+def watch_camera(env_id):
+    """gym.make arguments for --watch: the window's camera follows the agent. (The window
+    ignores camera_name; it takes the env's own view settings, here with a tracking type.)"""
+    import mujoco
+
+    with common.env_errors(env_id):
+        env = gym.make(env_id)
+    view = dict(env.unwrapped.mujoco_renderer.default_cam_config or {})
+    env.close()
+    return dict(default_camera_config={**view, "type": mujoco.mjtCamera.mjCAMERA_TRACKING})
+
+
 def main(argv=None):
-    """python ddpg_walker.py [flags]: train (then --watch), or --eval a saved model."""
+    """python ddpg_walker.py [flags]: train (then --watch), continue with --resume, or --eval
+    a saved model."""
     cfg = common.parse_config(Config, argv, description=" ".join(__doc__.split("\n\n")[0].split()))
     with common.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         if cfg.eval:
             play(cfg)
             return
-        result = train(cfg)  # on Ctrl-C it saves the model and logs, says so, and returns
+        result = train(cfg)  # on Ctrl-C it saves a checkpoint and the logs, says so, and returns
         if result["interrupted"]:
-            raise SystemExit(130)
+            raise KeyboardInterrupt
         if cfg.watch:
             play(dataclasses.replace(cfg, eval=str(result["run_dir"])))
 
