@@ -18,6 +18,15 @@ where PPO takes many behind its clip. The loop, top to bottom:
     python actor_critic_cartpole.py                  # train until solved, a few seconds on a CPU
     python actor_critic_cartpole.py --help           # every hyperparameter, with its meaning
     python actor_critic_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
+
+中文导读：本脚本教 A2C（优势 actor-critic）：一个共享隐藏层接 actor 和 critic 两个头，
+每采一批数据就用 n 步回报更新一次，不必等回合结束。配套教程：
+《使用 actor-critic 方法来控制 CartPole-V0 游戏》（004）。循环四步：
+
+    采样  当前策略在 num_envs 个环境里各走 num_steps 步
+    回报  n 步回报 R_t（批末和时间截断处用 V 自举），优势 A_t = R_t - V(s_t)
+    更新  一步梯度：策略损失 + vf_coef * 价值损失 - ent_coef * 熵
+    记录  每次更新在 progress.csv 里记一行，隔几次打印一行进度（含 running reward）
 """
 
 from __future__ import annotations

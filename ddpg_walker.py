@@ -21,6 +21,14 @@ every checkpoint_every steps a checkpoint.pt from which --resume continues the v
     python ddpg_walker.py                         # 1M steps: hours on a CPU, less on a GPU
     python ddpg_walker.py --resume runs/<run>     # continue a stopped or killed run exactly
     python ddpg_walker.py --eval runs/<run>/best.pt --watch   # replay a saved actor
+
+中文导读：本脚本教 DDPG，连续动作的 actor-critic：经验回放、目标网络和软更新、高斯探索噪声。
+配套教程：《【PyTorch深度强化学习】DDPG算法的讲解及实战(超详细 附源码)》（003）。循环四步：
+
+    行动  先随机动作预热 start_steps 步，之后用 mu(s) 加高斯噪声
+    存储  (s, a, r, s', terminated) 存进经验回放；时间截断不算终止，目标照样自举
+    学习  随机小批量上 critic、actor 各更新一步，目标网络向网络靠近 tau
+    评估  每 eval_every 步不加噪声跑 10 个回合，记进 evaluations.csv
 """
 
 from __future__ import annotations

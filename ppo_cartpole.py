@@ -12,6 +12,16 @@ early stop at 1.5 x target_kl). The loop, top to bottom:
     python ppo_cartpole.py                  # train until solved, a few seconds on a CPU
     python ppo_cartpole.py --help           # every hyperparameter, with its meaning
     python ppo_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
+
+中文导读：本脚本教 PPO-clip（近端策略优化的裁剪版本，教程里叫 PPO2）：策略网络、价值网络、
+缓冲区、裁剪代理目标和 GAE 怎样写对。配套教程：《PPO近段策略优化玩cartpole游戏》（000，
+标题里的“近段”应为“近端”）、《强化学习PPO从理论到代码详解(2)---PPO1和PPO2》（001），
+以及讲 compute_loss_pi 和 finish_path 的 002（原文没有标题）。循环四步：
+
+    采样  当前策略在 num_envs 个环境里各走 num_steps 步
+    优势  GAE 算出优势 A_t 和价值目标 R_t = A_t + V(s_t)（common.gae）
+    更新  打乱成小批量，在裁剪代理目标上训练 update_epochs 遍
+    记录  每次更新在 progress.csv 里记一行，隔几次打印一行进度
 """
 
 from __future__ import annotations

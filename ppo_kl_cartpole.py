@@ -16,6 +16,15 @@ and the beta update. The loop, top to bottom:
     python ppo_kl_cartpole.py                  # train until solved, a few seconds on a CPU
     python ppo_kl_cartpole.py --help           # every hyperparameter, with its meaning
     python ppo_kl_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
+
+中文导读：本脚本教 PPO-penalty（近端策略优化的 KL 惩罚版本，教程里叫 PPO1）：把 KL 散度
+作为惩罚项放进目标函数，每次更新后按 KL 的大小把 beta 减半或加倍。配套教程：
+《强化学习PPO从理论到代码详解(2)---PPO1和PPO2》（001）。循环四步：
+
+    采样  当前策略在 num_envs 个环境里各走 num_steps 步
+    优势  GAE 算出优势 A_t 和价值目标 R_t = A_t + V(s_t)（common.gae）
+    更新  小批量上训练 KL 惩罚目标 update_epochs 遍，再按平均 KL 调整 beta
+    记录  每次更新在 progress.csv 里记一行，隔几次打印一行进度
 """
 
 from __future__ import annotations

@@ -1,6 +1,9 @@
-"""The two READMEs: the same commands, the Chinese one mostly Chinese, and its code
-references (`file.py:LINE` `name`) still pointing at the line that holds the name."""
+"""The two READMEs: the same commands, the Chinese one mostly Chinese, its terms used one
+way, and its code references (`file.py:LINE` `name`), variable names and hyperparameter
+tables still agreeing with the code."""
 
+import dataclasses
+import importlib
 import re
 import string
 from pathlib import Path
@@ -11,7 +14,8 @@ SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", 
 TUTORIAL_TITLES = (
     "PPO近段策略优化玩cartpole游戏",  # 000
     "强化学习PPO从理论到代码详解(2)---PPO1和PPO2",  # 001
-    "损失函数", "强化学习PPO从理论到代码详解",  # 002: no title line of its own
+    "前面两节讲完了critic、actor以及缓冲区的设计",  # 002: no title line; its first sentence,
+    "实现机械臂reach某点之PPO算法实现",  # and the series it belongs to (not 001's)
     "【PyTorch深度强化学习】DDPG算法的讲解及实战(超详细 附源码)",  # 003
     "使用 actor-critic 方法来控制 CartPole-V0 游戏",  # 004
 )
@@ -31,12 +35,16 @@ def split_code(path):
 def commands(path):
     """The command lines of a markdown file's code blocks, trailing `  # comment` removed."""
     lines = (re.sub(r"\s+#.*$", "", line).strip() for line in split_code(path)[0])
-    return {line for line in lines if line.split(" ")[0] in ("python", "pip", "pytest", "tensorboard")}
+    return {line for line in lines
+            if line.split(" ")[0] in ("python", "pip", "pytest", "tensorboard")}
 
 
 def test_both_readmes_show_the_same_commands():
-    zh = commands(ZH)
-    assert commands(EN) == zh
+    en, zh = commands(EN), commands(ZH)
+    assert en <= zh, f"missing from README.zh-CN.md: {en - zh}"
+    # The Chinese one may add only the PyPI mirror lines a reader in China needs.
+    extra = {line for line in zh - en if "pypi.tuna.tsinghua.edu.cn" not in line}
+    assert not extra, f"commands only in README.zh-CN.md: {extra}"
     assert {"pip install -r requirements.txt", "python ppo_cartpole.py", "pytest"} <= zh
 
 
@@ -69,3 +77,95 @@ def test_code_references_point_at_their_names():
                 f"{ref.group(1)}:{number} does not contain {name.group(1)!r}"
             checked += 1
     assert checked >= 20
+
+
+def zh_prose():
+    """README.zh-CN.md outside its code blocks, as one string."""
+    return "\n".join(split_code(ZH)[1])
+
+
+def test_zh_readme_uses_one_word_per_term():
+    prose = zh_prose()
+    # The tutorials' other names for our terms are given, so a reader can map them.
+    for word in ("情节", "行动者", "评论家", "演员", "评论员", "折扣因子", "近端策略优化", "近段",
+                 "clip_param", "clip_ratio", "截断系数"):
+        assert word in prose, word
+    # First use of a term: the Chinese word, then the English in brackets.
+    for zh, en in (("回合", "episode"), ("回报", "return"), ("裁剪", "clip"),
+                   ("截断", "truncated"), ("终止", "terminated"), ("折扣因子", "discount factor"),
+                   ("自举", "bootstrap"), ("熵", "entropy"), ("奈特", "nat"),
+                   ("经验回放", "replay buffer"), ("重要性采样", "importance sampling"),
+                   ("广义优势估计", "GAE")):
+        first = prose.index(zh) + len(zh)
+        assert prose[first:first + len(en) + 1] == f"（{en}", f"first {zh} is not {zh}（{en}"
+    # 截断 is truncated only (clip is 裁剪): every line that says it names the time limit.
+    for line in prose.splitlines():
+        if "截断" in line:
+            assert "truncated" in line or "时间截断" in line, line
+    assert "nats" not in prose
+
+
+def table_rows(lines):
+    """Cells of each markdown table row in `lines` (a `\\|` inside a cell is not a border)."""
+    for line in lines:
+        if line.startswith("|") and not line.startswith("|---"):
+            yield [cell.strip() for cell in re.split(r"(?<!\\)\|", line)[1:-1]]
+
+
+def section(title):
+    """The lines of README.zh-CN.md's `## title` section."""
+    text = ZH.read_text(encoding="utf-8")
+    body = text.split(f"\n## {title}\n", 1)[1]
+    return body.split("\n## ", 1)[0].splitlines()
+
+
+def test_zh_variable_names_exist_in_the_script_named():
+    rows = [r for r in table_rows(section("术语对照")) if len(r) == 4 and ".py` `" in r[2]]
+    assert len(rows) >= 10
+    for row in rows:
+        script, *names = re.findall(r"`([^`]+)`", row[2])
+        source = (ROOT / script).read_text(encoding="utf-8")
+        for name in names:
+            assert name in source, f"{name!r} is not in {script}"
+
+
+def test_zh_hyperparameter_tables_match_each_config():
+    """Every flag of every script is in a table that names the script, once, with the
+    default that script's Config has."""
+    configs = {s: importlib.import_module(s[:-3]).Config for s in SCRIPTS}
+    seen = {s: [] for s in SCRIPTS}
+    scripts = ()
+    for line in section("超参数"):
+        if line.startswith("### "):
+            scripts = re.findall(r"`(\w+\.py)`", line)
+            assert scripts and set(scripts) <= set(SCRIPTS), line
+            continue
+        row = next(table_rows([line]), None)
+        if not row or not row[0].startswith("`--"):
+            continue
+        flag = re.match(r"`--([\w-]+)`", row[0]).group(1)
+        shown = re.search(r"`([^`]*)`", row[2]).group(1)
+        for script in scripts:
+            fields = {f.name: f.default for f in dataclasses.fields(configs[script])}
+            name = flag.replace("-", "_")
+            assert name in fields, f"--{flag} is not a flag of {script}"
+            assert same(shown, fields[name]), \
+                f"{script} --{flag}: the table says {shown}, the Config {fields[name]!r}"
+            seen[script].append(name)
+    for script, names in seen.items():
+        fields = [f.name for f in dataclasses.fields(configs[script])]
+        twice = {name for name in names if names.count(name) > 1}
+        assert sorted(names) == sorted(fields), \
+            f"{script}: not in the tables {set(fields) - set(names)}, twice {twice}"
+
+
+def same(shown, default):
+    """Whether the text of a table's default cell states `default`."""
+    if default is None or isinstance(default, bool):
+        return shown == str(default)
+    if isinstance(default, (int, float)):
+        try:
+            return float(shown) == default
+        except ValueError:
+            return False
+    return shown == default
