@@ -371,12 +371,14 @@ def clock(seconds):
 def progress_line(step, cfg, episodes, losses, timer):
     """'step 30000  151 steps/s  rest of the budget 1:47:02  return(10) ...' (plumbing)."""
     now = time.time()
-    if step > cfg.start_steps and timer["step"] > cfg.start_steps:  # steps/s since last line
-        timer["rate"] = (step - timer["step"]) / (now - timer["time"])
+    # steps/s of learning since the last line (or since learning began, if it was later)
+    since_step, since = max((timer["step"], timer["time"]), timer.get("learning_since", (step, 0)))
+    if step > cfg.start_steps and step > since_step:
+        timer["rate"] = (step - since_step) / (now - since)
         left = (cfg.total_timesteps - step) / timer["rate"]
         speed = f"{timer['rate']:5.0f} steps/s  rest of the budget {clock(left)}"
     else:
-        speed = "warm-up (random actions)"
+        speed = "learning starts" if step > cfg.start_steps else "warm-up (random actions)"
     timer.update(step=step, time=now)
     recent = f"{np.mean([r for _, r in episodes[-10:]]):8.1f}" if episodes else "     n/a"
     loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
@@ -401,6 +403,7 @@ def save_checkpoint(run_dir, cfg, nets, buffer, env, loop):
     """checkpoint.pt: everything that decides what the run does next, so that --resume goes
     on exactly as if it had never stopped. `loop` holds the loop's own variables."""
     filled = slice(0, buffer.count)  # only the filled part of the buffer: compact early on
+    started, path = time.time(), run_dir / "checkpoint.pt"
     common.save_checkpoint(dict(
         script="ddpg_walker", config=asdict(cfg), **{k: n.state_dict() for k, n in zip(NETS, nets)},
         buffer={k: getattr(buffer, k)[filled].cpu().clone() for k in BUFFER},
@@ -409,7 +412,9 @@ def save_checkpoint(run_dir, cfg, nets, buffer, env, loop):
         cuda_rng=torch.cuda.get_rng_state() if buffer.obs.is_cuda else None,
         action_space_rng=env.action_space.np_random.bit_generator.state,  # the warm-up actions
         env=env_state(env),
-        **{**loop, "obs": torch.as_tensor(loop["obs"])}), run_dir / "checkpoint.pt")
+        **{**loop, "obs": torch.as_tensor(loop["obs"])}), path)
+    print(f"checkpoint at step {loop['global_step']}: {path} ({path.stat().st_size / 2**20:.0f} "
+          f"MB, written in {time.time() - started:.1f} s)", flush=True)
 
 
 def load_checkpoint(run_dir, nets, buffer, env):

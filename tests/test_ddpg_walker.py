@@ -113,6 +113,62 @@ def test_actor_loss_is_minus_q_and_its_step_raises_q():
     assert critic(obs, actor(obs)).mean().item() > q_before + 1e-3
 
 
+def test_ddpg_update_by_hand_the_target_networks_give_the_td_target():
+    """One update on a fixed batch: the critic's loss is the MSE to y = r + gamma * not_done *
+    Q'(s', mu'(s')) with the TARGET networks (here made different from the online ones)."""
+    torch.manual_seed(0)
+    cfg = ddpg.Config(gamma=0.9, tau=0.5, hidden=8)
+    nets = ddpg.build(3, 2, np.full(2, -1.0), np.full(2, 1.0), cfg, torch.device("cpu"))
+    actor, critic, actor_target, critic_target = nets[:4]
+    with torch.no_grad():
+        for p in [*actor.parameters(), *critic.parameters()]:
+            p.add_(0.5 * torch.randn_like(p))  # the online networks moved away from the targets
+    obs, action, next_obs = torch.randn(5, 3), torch.rand(5, 2) * 2 - 1, torch.randn(5, 3)
+    reward, not_done = torch.randn(5), torch.tensor([1.0, 1.0, 0.0, 1.0, 0.0])
+    with torch.no_grad():
+        q = critic(obs, action)
+        y = reward + 0.9 * not_done * critic_target(next_obs, actor_target(next_obs))
+        y_online = reward + 0.9 * not_done * critic(next_obs, actor(next_obs))
+        assert not torch.allclose(y, y_online)  # the test can tell the two apart
+        targets_before = [p.clone() for p in [*actor_target.parameters(), *critic_target.parameters()]]
+    critic_loss, actor_loss = ddpg.ddpg_update(*nets, (obs, action, reward, next_obs, not_done), cfg)
+    assert critic_loss.item() == pytest.approx(((q - y) ** 2).mean().item(), rel=1e-6)
+    # the actor's loss is -Q(s, mu(s)) under the critic just updated
+    assert actor_loss.item() < 0 or actor_loss.item() > 0
+    # then the targets moved halfway (tau = 0.5) toward the updated networks
+    after = [*actor_target.parameters(), *critic_target.parameters()]
+    online = [*actor.parameters(), *critic.parameters()]
+    for before, target, net in zip(targets_before, after, online):
+        torch.testing.assert_close(target, 0.5 * before + 0.5 * net.detach())
+
+
+def test_the_warm_up_is_evaluated_once_then_every_eval_every(tmp_path):
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1500,
+                              start_steps=1000, eval_every=250, eval_episodes=1, gifs=False,
+                              curves=False))
+    assert [s for s, _, _ in result["evaluations"]] == [250, 1250, 1500]
+
+
+def test_eval_gif_writes_a_gif_of_a_saved_actor_without_a_display(tmp_path):
+    first = ddpg.train(small(tmp_path, total_timesteps=400, start_steps=300, eval_every=400,
+                             eval_episodes=1, gifs=False, curves=False))
+    out = tmp_path / "walker.gif"
+    p = run_script("ddpg_walker.py", "--eval", first["run_dir"] / "best.pt", "--gif", out)
+    assert p.returncode == 0, p.stderr
+    frames = iio.imread(out)
+    assert frames.ndim == 4 and frames.shape[0] >= 2 and frames[0].std() > 10
+    assert f"{out}: one episode, return" in p.stdout
+
+
+def test_watch_window_follows_the_agent():
+    """The window (render_mode="human") ignores camera_name: --watch asks for a tracking camera
+    on top of the env's own view settings."""
+    import mujoco
+
+    kw = ddpg.watch_camera("Walker2d-v5")["default_camera_config"]
+    assert kw["type"] == mujoco.mjtCamera.mjCAMERA_TRACKING and kw["distance"] == 4.0
+
+
 def test_critic_takes_the_action_at_its_second_layer():
     critic = ddpg.Critic(obs_dim=17, act_dim=6, hidden=32)
     assert critic.l1.in_features == 17 and critic.l2.in_features == 32 + 6
@@ -127,8 +183,9 @@ def small(tmp_path, **kw):
 def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
     result = ddpg.train(small(tmp_path))
     run = result["run_dir"]
-    assert {p.name for p in run.iterdir()} == {"evaluations.csv", "model.pt", "best.pt", "best.gif",
-                                               "curve.png", "before.gif", "after.gif"}
+    assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",
+                                               "best.gif", "curve.png", "before.gif", "after.gif",
+                                               "checkpoint.pt"}
     rows = list(csv.DictReader(open(run / "evaluations.csv")))
     assert [int(r["global_step"]) for r in rows] == [300, 600]
     assert {"eval_mean", "eval_std"} <= set(rows[0])
@@ -206,33 +263,93 @@ def test_the_camera_follows_the_walker():
     assert walker_pixels()[1] < 50  # the default camera lost it: the test can tell
 
 
-def test_resume_restores_the_weights_and_takes_the_new_learning_rates(tmp_path):
-    first = ddpg.train(small(tmp_path / "a", gifs=False, curves=False))
-    saved = torch.load(first["run_dir"] / "model.pt", weights_only=True)
-    # Resume into a warm-up only (no update): the weights must come back exactly as saved.
-    second = ddpg.train(small(tmp_path / "b", gifs=False, curves=False, total_timesteps=700,
-                              start_steps=100, actor_lr=1e-5, critic_lr=2e-5,
-                              resume=str(first["run_dir"] / "model.pt")))
-    resumed = torch.load(second["run_dir"] / "model.pt", weights_only=True)
-    assert resumed["global_step"] == 700
+# --- exact continuation: a stopped, killed or interrupted run, resumed, is the unbroken run ---
+
+PENDULUM = dict(env_id="InvertedPendulum-v5", total_timesteps=2400, start_steps=600, eval_every=300,
+                eval_episodes=2, checkpoint_every=800, print_every=100, batch_size=64, hidden=64,
+                gifs=False, curves=False, cuda=False)
+
+
+def pendulum_flags(**kw):
+    cfg = {**PENDULUM, **kw}
+    flags = []
+    for name, value in cfg.items():
+        flag = "--" + name.replace("_", "-")
+        flags += [flag] if value is True else [f"--no-{flag[2:]}"] if value is False else [flag, value]
+    return flags
+
+
+def assert_same_run(a, b):
+    """Same logs byte for byte, same final weights bit for bit (every network, both optimizers)."""
+    for name in ("evaluations.csv", "episodes.csv"):
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+    ca, cb = (torch.load(d / "checkpoint.pt", weights_only=True) for d in (a, b))
+    assert ca["global_step"] == cb["global_step"]
     for key in ("actor", "critic", "actor_target", "critic_target"):
-        for name, tensor in saved[key].items():
-            assert torch.equal(resumed[key][name], tensor), (key, name)
-    assert resumed["actor_opt"]["param_groups"][0]["lr"] == 1e-5  # this run's flags win
-    assert resumed["critic_opt"]["param_groups"][0]["lr"] == 2e-5
+        for name, tensor in ca[key].items():
+            assert torch.equal(cb[key][name], tensor), (key, name)
+    for key in ("actor_opt", "critic_opt"):
+        for i, state in ca[key]["state"].items():
+            assert all(torch.equal(cb[key]["state"][i][k], v) for k, v in state.items()), key
 
 
-def test_resume_continues_from_the_saved_step(tmp_path):
-    first = ddpg.train(small(tmp_path / "a", gifs=False))
-    saved = torch.load(first["run_dir"] / "model.pt", weights_only=True)
-    second = ddpg.train(small(tmp_path / "b", gifs=False, total_timesteps=900, start_steps=100,
-                              resume=str(first["run_dir"] / "model.pt")))
-    assert [step for step, _, _ in second["evaluations"]] == [900]  # steps 601..900, evaluated at 900
-    resumed = torch.load(second["run_dir"] / "model.pt", weights_only=True)
-    assert resumed["global_step"] == 900
-    # It started from the saved weights (Adam's step count carried on), not from scratch.
-    first_state = saved["actor_opt"]["state"][0]["step"].item()
-    assert resumed["actor_opt"]["state"][0]["step"].item() == first_state + 300 - 100
+@pytest.fixture(scope="module")
+def unbroken(tmp_path_factory):
+    """The reference: one run that never stopped."""
+    return ddpg.train(ddpg.Config(**PENDULUM, run_dir=str(tmp_path_factory.mktemp("unbroken"))))
+
+
+def test_resume_after_a_kill_rolls_back_to_the_checkpoint_and_is_the_unbroken_run(unbroken, tmp_path):
+    """kill -9 after the step-800 checkpoint, once later rows are written: --resume drops those
+    rows, continues from step 800 and ends exactly as the run that never stopped."""
+    proc = subprocess.Popen([sys.executable, str(ROOT / "ddpg_walker.py"), *map(str, pendulum_flags()),
+                             "--run-dir", str(tmp_path)], stdout=subprocess.PIPE, text=True, cwd=ROOT,
+                            env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    seen = []
+    for line in proc.stdout:  # wait for the checkpoint, then for rows that come after it
+        seen.append(line)
+        if line.startswith("evaluation at step 1200"):
+            break
+    proc.kill()  # SIGKILL: no handler runs, nothing is saved
+    proc.wait()
+    assert any(line.startswith("checkpoint at step 800") for line in seen), seen
+    (run,) = tmp_path.iterdir()
+    steps = [int(r["global_step"]) for r in csv.DictReader(open(run / "evaluations.csv"))]
+    assert steps[-1] >= 1200  # rows after the checkpoint were written before the kill
+    (run / "checkpoint.pt.tmp").write_bytes(b"half a checkpoint")  # as a kill mid-write leaves it
+    result = ddpg.train(ddpg.Config(resume=str(run)))  # its saved settings, not the defaults
+    assert result["global_step"] == PENDULUM["total_timesteps"]
+    assert not list(run.glob("*.tmp"))
+    assert_same_run(unbroken["run_dir"], run)
+
+
+def test_ctrl_c_saves_a_checkpoint_at_the_step_it_stopped_and_resume_is_the_unbroken_run(unbroken, tmp_path):
+    code, out, err = interrupt("ddpg_walker.py", *pendulum_flags(), "--run-dir", tmp_path,
+                               after="step     1100")
+    assert code == 130, err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+    (run,) = tmp_path.iterdir()
+    stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
+    assert 1100 <= stopped < 2400 and stopped % 800  # where Ctrl-C came, not a periodic checkpoint
+    assert f"interrupted at step {stopped}" in out and f"--resume {run}" in out
+    result = ddpg.train(ddpg.Config(resume=str(run), run_dir=str(tmp_path)))
+    assert result["global_step"] == 2400
+    assert_same_run(unbroken["run_dir"], run)
+
+
+def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbroken, tmp_path):
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(unbroken["run_dir"], run)
+    with pytest.raises(ddpg.common.UserError, match="already ran 2400 steps"):
+        ddpg.train(ddpg.Config(resume=str(run)))
+    with pytest.raises(ddpg.common.UserError, match="--actor-lr 0.001 differs from the saved 0.0003"):
+        ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700, actor_lr=1e-3))
+    result = ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))
+    assert [s for s, _, _ in result["evaluations"]][-2:] == [2400, 2700]
+    ckpt = torch.load(run / "checkpoint.pt", weights_only=True)
+    assert ckpt["global_step"] == 2700 and ckpt["config"]["hidden"] == 64  # the saved settings
 
 
 def test_same_seed_same_evaluations(tmp_path):
@@ -250,7 +367,10 @@ def test_same_seed_same_evaluations(tmp_path):
      "cannot allocate a replay buffer"),
     (["--eval", "{tmp}"], "no checkpoint at"),
     (["--eval", "{tmp}/missing.pt"], "no checkpoint"),
-    (["--resume", "{file}"], "truncated, corrupt or not a checkpoint"),
+    (["--resume", "{tmp}"], "no checkpoint at"),
+    (["--resume", "{tmp}", "--eval", "{file}"], "pass one"),
+    (["--gif", "{tmp}/x.gif"], "it needs --eval"),
+    (["--env-id", "Pendulum-v1"], "is not a MuJoCo env"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
     bad = tmp_path / "bad.pt"
@@ -272,17 +392,6 @@ def test_missing_mujoco_is_one_clear_line(tmp_path):
                        timeout=120)
     assert p.returncode == 2, p.stderr
     assert "needs a package that is not installed" in p.stderr and "Traceback" not in p.stderr
-
-
-def test_ctrl_c_saves_model_and_log(tmp_path):
-    code, out, err = interrupt("ddpg_walker.py", "--env-id", "InvertedPendulum-v5", "--run-dir", tmp_path,
-                               "--start-steps", 100, "--batch-size", 64, "--eval-every", 200, "--eval-episodes", 1, "--print-every", 50,
-                               "--no-cuda", after="evaluation")
-    assert code == 130, err
-    assert "Traceback" not in err and "interrupted" in out
-    (run,) = tmp_path.iterdir()
-    assert torch.load(run / "model.pt", weights_only=True)["global_step"] >= 200
-    assert len(list(csv.DictReader(open(run / "evaluations.csv")))) >= 1
 
 
 @pytest.mark.slow
