@@ -1,0 +1,133 @@
+"""The headline DDPG measurement: ddpg_walker.py at its defaults (Walker2d-v5, 1M steps) on
+seeds 0, 1 and 2, one torch thread each. A run takes hours, so this starts the runs in the
+background, continues any that stopped (--resume: the same run, exactly), and copies each
+run's evaluations.csv into benchmarks/results/ddpg_walker_1m/seed<k>/ as it grows.
+
+    python benchmarks/ddpg_walker_1m.py start ~/ddpg-1m    # start or continue what is unfinished
+    python benchmarks/ddpg_walker_1m.py status ~/ddpg-1m   # where each run is; copy the CSVs
+    python benchmarks/ddpg_walker_1m.py table              # the README table, from the copies
+
+The measure (as in the TD3 paper's table): per seed, the mean of the last 10 evaluations
+(each the mean return of 10 episodes without exploration noise); the goal is a mean over the
+three seeds of at least 2000 at 1M steps.
+"""
+
+import argparse
+import csv
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import torch
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results" / "ddpg_walker_1m"
+SEEDS, BUDGET, GOAL = (0, 1, 2), 1_000_000, 2000.0
+MILESTONES = (100_000, 300_000, 500_000, 1_000_000)
+
+
+def run_of(parent, seed):
+    """The run folder of `seed` under `parent` (the newest, if several), or None."""
+    runs = sorted(Path(parent).glob(f"ddpg_walker__Walker2d-v5__seed{seed}__*"))
+    return runs[-1] if runs else None
+
+
+def running(parent, seed):
+    pid_file = Path(parent) / f"seed{seed}.pid"
+    if not pid_file.exists():
+        return False
+    try:
+        os.kill(int(pid_file.read_text()), 0)  # signal 0: is the process alive?
+        return True
+    except (ProcessLookupError, ValueError):
+        return False
+
+
+def saved_step(run):
+    ckpt = run / "checkpoint.pt" if run else None
+    return torch.load(ckpt, weights_only=True, mmap=True)["global_step"] if ckpt and ckpt.exists() else 0
+
+
+def start(parent):
+    parent.mkdir(parents=True, exist_ok=True)
+    for seed in SEEDS:
+        run = run_of(parent, seed)
+        if running(parent, seed):
+            print(f"seed {seed}: running ({run})")
+            continue
+        step = saved_step(run)
+        if step >= BUDGET:
+            print(f"seed {seed}: finished ({run})")
+            continue
+        how = ["--resume", str(run)] if step else ["--seed", str(seed), "--run-dir", str(parent)]
+        log = open(parent / f"seed{seed}.log", "a")
+        # nice: other work on the machine comes first; the runs use what is left.
+        proc = subprocess.Popen(["nice", "-n", "19", sys.executable, str(ROOT / "ddpg_walker.py"),
+                                 *how], stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,
+                                start_new_session=True)
+        (parent / f"seed{seed}.pid").write_text(str(proc.pid))
+        print(f"seed {seed}: {'continuing from step ' + str(step) if step else 'started'} "
+              f"(pid {proc.pid}, log {parent / f'seed{seed}.log'})")
+
+
+def status(parent):
+    for seed in SEEDS:
+        run = run_of(parent, seed)
+        if run is None or not (run / "evaluations.csv").exists():
+            print(f"seed {seed}: no evaluations yet")
+            continue
+        out = RESULTS / f"seed{seed}"
+        out.mkdir(parents=True, exist_ok=True)
+        shutil.copy(run / "evaluations.csv", out / "evaluations.csv")
+        rows = read(out / "evaluations.csv")
+        print(f"seed {seed}: evaluated up to step {rows[-1][0]}, checkpoint at {saved_step(run)}"
+              f"{', running' if running(parent, seed) else ''}; last 10: {last10(rows):.0f}")
+
+
+def read(path):
+    with open(path) as f:
+        return [(int(r["global_step"]), float(r["eval_mean"])) for r in csv.DictReader(f)]
+
+
+def last10(rows, upto=None):
+    means = [m for step, m in rows if upto is None or step <= upto][-10:]
+    return sum(means) / len(means) if means else float("nan")
+
+
+def table():
+    lines = ["| seed | " + " | ".join(f"{m // 1000}k" for m in MILESTONES) + " |",
+             "|---|" + "---|" * len(MILESTONES)]
+    finals = []
+    for seed in SEEDS:
+        path = RESULTS / f"seed{seed}" / "evaluations.csv"
+        rows = read(path) if path.exists() else []
+        reached = rows[-1][0] if rows else 0
+        cells = [f"{last10(rows, m):.0f}" if reached >= m else "-" for m in MILESTONES]
+        lines.append(f"| {seed} | " + " | ".join(cells) + " |")
+        if reached >= BUDGET:
+            finals.append(last10(rows, BUDGET))
+    print("\n".join(lines))
+    print("\nEach cell: the mean of the last 10 evaluations up to that step (- : not reached).")
+    if len(finals) == len(SEEDS):
+        mean = sum(finals) / len(finals)
+        print(f"Goal (mean over the seeds at 1M >= {GOAL:.0f}): {mean:.0f}, "
+              f"{'met' if mean >= GOAL else 'not met'}")
+    else:
+        print(f"Goal not yet measurable: {len(finals)} of {len(SEEDS)} runs have reached 1M steps")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("action", choices=("start", "status", "table"))
+    parser.add_argument("parent", nargs="?", type=Path, help="folder of the three run folders")
+    args = parser.parse_args()
+    if args.action != "table" and args.parent is None:
+        parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m")
+    {"start": lambda: start(args.parent), "status": lambda: status(args.parent), "table": table}[
+        args.action]()
+
+
+if __name__ == "__main__":
+    main()
