@@ -292,7 +292,8 @@ GIF = dict(max_frames=250, every=4, scale=2)
 def make_continuous_env(env_id):
     """The env, or a UserError if it is not a MuJoCo env with Box actions."""
     with common.env_errors(env_id):
-        env = gym.make(env_id)
+        # RecordEpisodeStatistics: info["episode"]["r"] is the return when an episode ends
+        env = gym.wrappers.RecordEpisodeStatistics(gym.make(env_id))
     if not isinstance(env.action_space, gym.spaces.Box):
         env.close()
         raise common.UserError(f"{env_id} has a {type(env.action_space).__name__} action space; "
@@ -317,37 +318,95 @@ def build(obs_dim, act_dim, low, high, cfg, device):
 
 
 # =============================================================================
-# Plumbing of the loop: logs, saved models, checkpoints, Ctrl-C. A first reading can
-# skip to train() below; each function here says in its first line what it does.
+# Plumbing of the loop: evaluation, logs, saved models, checkpoints, Ctrl-C. A first
+# reading can skip to train() below; each function says in its first line what it does.
 # =============================================================================
 
 
-def after_step(step, cfg, run_dir, actor, episodes, evaluations, losses, timer):
-    """The logs of one env step: a finished episode's row in episodes.csv, a progress line
-    every print_every steps; after an evaluation its row in evaluations.csv, model.pt,
-    best.pt and best.gif when it is the best so far, curve.png and TensorBoard."""
+class CtrlC:
+    """While training, a first Ctrl-C only sets `pressed`: the loop finishes its step, where
+    nothing is half done, and stops there with a checkpoint. A second Ctrl-C stops at once
+    (the last checkpoint is kept)."""
+
+    def __init__(self):
+        self.pressed = False
+        self.active = (threading.current_thread() is threading.main_thread()
+                       and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+    def __enter__(self):
+        if self.active:
+            signal.signal(signal.SIGINT, self.handler)
+        return self
+
+    def handler(self, signum, frame):
+        if self.pressed:
+            raise KeyboardInterrupt
+        self.pressed = True
+
+    def __exit__(self, *exc):
+        if self.active:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+@dataclass
+class Run:
+    """What the plumbing works on besides the loop's own variables."""
+    cfg: Config
+    dir: Path  # the run folder
+    nets: tuple  # actor, critic, actor_target, critic_target, actor_opt, critic_opt
+    buffer: ReplayBuffer
+    env: gym.Env
+    device: torch.device
+    episodes: list  # (step, return) of every finished training episode
+    evaluations: list  # (step, mean, std) of every evaluation
+    timer: dict  # for steps/s: when this process started, and the last progress line
+    ctrl_c: CtrlC
+
+
+def after_step(run, step, obs, losses):
+    """The rest of one env step: every eval_every steps (once only during the warm-up) an
+    evaluation of mu(s) without noise, with its row in evaluations.csv, model.pt, best.pt and
+    best.gif when it is the best so far, curve.png; a finished episode's row in episodes.csv;
+    a progress line every print_every steps; a checkpoint every checkpoint_every steps, at the
+    end, and when Ctrl-C was pressed, which then stops the run here, where the step is whole."""
+    cfg, actor = run.cfg, run.nets[0]
     if step > cfg.start_steps:  # the learning phase's steps/s: from this process's first update
-        timer.setdefault("learning_since", (step, time.time()))
-    if episodes and episodes[-1][0] == step:
-        common.append_csv(run_dir / "episodes.csv", episode_row(*episodes[-1]))
+        run.timer.setdefault("learning_since", (step, time.time()))
+    if run.episodes and run.episodes[-1][0] == step:
+        common.append_csv(run.dir / "episodes.csv", episode_row(*run.episodes[-1]))
     if step % cfg.print_every == 0:
-        print(progress_line(step, cfg, episodes, losses, timer), flush=True)
-    if not evaluations or evaluations[-1][0] != step:
-        return
-    _, mean, std = evaluations[-1]
-    common.append_csv(run_dir / "evaluations.csv", evaluation_row(evaluations[-1], episodes))
+        print(progress_line(step, cfg, run.episodes, losses, run.timer), flush=True)
+    if step % cfg.eval_every == 0 and (step > cfg.start_steps or not run.evaluations):
+        evaluate_and_save(run, step)
+    if step % cfg.checkpoint_every == 0 or step == cfg.total_timesteps or run.ctrl_c.pressed:
+        save_checkpoint(run, step, obs)  # the last one is kept: --total-timesteps may extend it
+    if run.ctrl_c.pressed:
+        raise KeyboardInterrupt
+
+
+def evaluate_and_save(run, step):
+    """Evaluate the actor without noise; log it, save model.pt, and best.pt and best.gif if
+    it is the best evaluation so far; redraw curve.png."""
+    cfg, actor = run.cfg, run.nets[0]
+    returns = common.evaluate(cfg.env_id, deterministic(actor, run.device), cfg.eval_episodes,
+                              cfg.eval_seed)
+    mean, std = float(np.mean(returns)), float(np.std(returns))
+    best = max((m for _, m, _ in run.evaluations), default=-float("inf"))
+    run.evaluations.append((step, mean, std))
+    common.append_csv(run.dir / "evaluations.csv",
+                      evaluation_row(run.evaluations[-1], run.episodes))
     print(f"evaluation at step {step}: {mean:.1f} +- {std:.1f} over {cfg.eval_episodes} "
           f"episodes", flush=True)
-    save_model(run_dir / "model.pt", actor, cfg, step)
-    if mean > max((m for _, m, _ in evaluations[:-1]), default=-float("inf")):  # a new best
-        save_model(run_dir / "best.pt", actor, cfg, step)
+    save_model(run.dir / "model.pt", actor, cfg, step)
+    if mean > best:
+        save_model(run.dir / "best.pt", actor, cfg, step)
         if cfg.gifs:
-            common.record_gif(cfg.env_id, deterministic(actor, actor.l1.weight.device),
-                              run_dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
+            common.record_gif(cfg.env_id, deterministic(actor, run.device), run.dir / "best.gif",
+                              cfg.eval_seed, **GIF, **CAMERA)
     if cfg.curves:
-        plots.draw_run(run_dir)  # rewritten at every evaluation: open it any time
+        plots.draw_run(run.dir)  # rewritten at every evaluation: open it any time
     if cfg.tensorboard:
-        plots.to_tensorboard(run_dir, sps=timer["rate"])
+        plots.to_tensorboard(run.dir, sps=run.timer["rate"])
 
 
 def episode_row(step, ep_return):
@@ -399,31 +458,31 @@ NETS = ("actor", "critic", "actor_target", "critic_target", "actor_opt", "critic
 BUFFER = ("obs", "action", "reward", "next_obs", "not_done")
 
 
-def save_checkpoint(run_dir, cfg, nets, buffer, env, loop):
+def save_checkpoint(run, step, obs):
     """checkpoint.pt: everything that decides what the run does next, so that --resume goes
-    on exactly as if it had never stopped. `loop` holds the loop's own variables."""
-    filled = slice(0, buffer.count)  # only the filled part of the buffer: compact early on
-    started, path = time.time(), run_dir / "checkpoint.pt"
+    on exactly as if the run had never stopped."""
+    buffer, filled = run.buffer, slice(0, run.buffer.count)  # only the filled part: compact
+    started, path = time.time(), run.dir / "checkpoint.pt"
     common.save_checkpoint(dict(
-        script="ddpg_walker", config=asdict(cfg), **{k: n.state_dict() for k, n in zip(NETS, nets)},
-        buffer={k: getattr(buffer, k)[filled].cpu().clone() for k in BUFFER},
+        script="ddpg_walker", config=asdict(run.cfg), global_step=step, obs=torch.as_tensor(obs),
+        **{key: net.state_dict() for key, net in zip(NETS, run.nets)},
+        buffer={key: getattr(buffer, key)[filled].cpu().clone() for key in BUFFER},
         buffer_ptr=buffer.ptr, buffer_count=buffer.count,
         torch_rng=torch.get_rng_state(),  # the exploration noise and the minibatch draws
         cuda_rng=torch.cuda.get_rng_state() if buffer.obs.is_cuda else None,
-        action_space_rng=env.action_space.np_random.bit_generator.state,  # the warm-up actions
-        env=env_state(env),
-        **{**loop, "obs": torch.as_tensor(loop["obs"])}), path)
-    print(f"checkpoint at step {loop['global_step']}: {path} ({path.stat().st_size / 2**20:.0f} "
-          f"MB, written in {time.time() - started:.1f} s)", flush=True)
+        action_space_rng=run.env.action_space.np_random.bit_generator.state,  # warm-up actions
+        env=env_state(run.env), episodes=run.episodes, evaluations=run.evaluations), path)
+    print(f"checkpoint at step {step}: {path} ({path.stat().st_size / 2**20:.0f} MB, written in "
+          f"{time.time() - started:.1f} s)", flush=True)
 
 
-def load_checkpoint(run_dir, nets, buffer, env):
-    """Put the state saved by save_checkpoint back; return the loop's own variables."""
-    ckpt = common.load_checkpoint(run_dir / "checkpoint.pt",
-                                  required=NETS + ("buffer", "env", "torch_rng", "global_step"))
-    for key, obj in zip(NETS, nets):
-        common.load_weights(obj, ckpt[key], run_dir / "checkpoint.pt")
-    n = ckpt["buffer_count"]
+def load_checkpoint(run):
+    """Put back what save_checkpoint saved; return the loop's (global_step, obs)."""
+    path = run.dir / "checkpoint.pt"
+    ckpt = common.load_checkpoint(path, required=NETS + ("buffer", "env", "torch_rng", "obs"))
+    for key, obj in zip(NETS, run.nets):
+        common.load_weights(obj, ckpt[key], path)
+    buffer, n = run.buffer, ckpt["buffer_count"]
     for key in BUFFER:
         getattr(buffer, key)[:n] = ckpt["buffer"][key].to(buffer.obs.device)
     # A run extended by --total-timesteps may get a larger buffer: it fills on after row n.
@@ -431,22 +490,27 @@ def load_checkpoint(run_dir, nets, buffer, env):
     torch.set_rng_state(ckpt["torch_rng"])
     if ckpt["cuda_rng"] is not None and buffer.obs.is_cuda:
         torch.cuda.set_rng_state(ckpt["cuda_rng"])
-    env.action_space.np_random.bit_generator.state = ckpt["action_space_rng"]
-    set_env_state(env, ckpt["env"])
-    loop = {k: ckpt[k] for k in ("global_step", "ep_return", "episodes", "evaluations")}
-    return dict(loop, obs=ckpt["obs"].numpy())
+    run.env.action_space.np_random.bit_generator.state = ckpt["action_space_rng"]
+    set_env_state(run.env, ckpt["env"])
+    run.episodes[:], run.evaluations[:] = ckpt["episodes"], ckpt["evaluations"]
+    return ckpt["global_step"], ckpt["obs"].numpy()
 
 
 def env_state(env):
     """The env mid-episode: MuJoCo's whole simulator state (positions, velocities, the
-    solver's warm start), the time limit's step count, and the generator used at reset."""
+    solver's warm start), the time limit's step count, the episode's return and length so
+    far, and the generator used at reset."""
     import mujoco
 
     sim, what = env.unwrapped, mujoco.mjtState.mjSTATE_INTEGRATION
     state = np.empty(mujoco.mj_stateSize(sim.model, what))
     mujoco.mj_getState(sim.model, sim.data, state, what)
     return dict(mujoco=torch.from_numpy(state), rng=sim.np_random.bit_generator.state,
-                elapsed_steps=env.get_wrapper_attr("_elapsed_steps"))
+                **{name: float(env.get_wrapper_attr(name)) if name == "episode_returns"
+                   else int(env.get_wrapper_attr(name)) for name in ENV_COUNTERS})
+
+
+ENV_COUNTERS = ("_elapsed_steps", "episode_returns", "episode_lengths")
 
 
 def set_env_state(env, saved):
@@ -455,8 +519,9 @@ def set_env_state(env, saved):
     sim = env.unwrapped
     mujoco.mj_setState(sim.model, sim.data, saved["mujoco"].numpy(),
                        mujoco.mjtState.mjSTATE_INTEGRATION)
-    env.set_wrapper_attr("_elapsed_steps", saved["elapsed_steps"])
     sim.np_random.bit_generator.state = saved["rng"]
+    for name in ENV_COUNTERS:
+        env.set_wrapper_attr(name, saved[name])
 
 
 # Settings --resume may change: how long to go on, and what is shown or written. The rest
@@ -487,31 +552,6 @@ def config_to_resume(cfg):
         raise common.UserError(f"{cfg.resume} already ran {saved['global_step']} steps; pass a "
                                f"larger --total-timesteps to go on")
     return cfg
-
-
-class CtrlC:
-    """While training, a first Ctrl-C only sets `pressed`: the loop finishes its step, where
-    nothing is half done, and stops there with a checkpoint. A second Ctrl-C stops at once
-    (the last checkpoint is kept)."""
-
-    def __init__(self):
-        self.pressed = False
-        self.active = (threading.current_thread() is threading.main_thread()
-                       and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-
-    def __enter__(self):
-        if self.active:
-            signal.signal(signal.SIGINT, self.handler)
-        return self
-
-    def handler(self, signum, frame):
-        if self.pressed:
-            raise KeyboardInterrupt
-        self.pressed = True
-
-    def __exit__(self, *exc):
-        if self.active:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 # =============================================================================
@@ -548,21 +588,22 @@ def train(cfg: Config):
     low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
     obs, _ = env.reset(seed=cfg.seed)
-    global_step, ep_return, episodes, evaluations, losses = 0, 0.0, [], [], None
+    global_step, losses = 0, None
+    run_dir = Path(cfg.resume) if cfg.resume else None
+    run = Run(cfg, run_dir, nets, buffer, env, device, episodes=[], evaluations=[],
+              timer=dict(start=start_time, step=0, time=time.time(), rate=float("nan")),
+              ctrl_c=CtrlC())
     if cfg.resume:  # the same run goes on: weights, buffer, generators, env, logs as saved
-        run_dir = Path(cfg.resume)
-        loop = load_checkpoint(run_dir, nets, buffer, env)
-        global_step, obs, ep_return = loop["global_step"], loop["obs"], loop["ep_return"]
-        episodes, evaluations = loop["episodes"], loop["evaluations"]
-        rewind_logs(run_dir, episodes, evaluations)
-        print(f"resumed {run_dir} at step {global_step} of {cfg.total_timesteps}", flush=True)
+        global_step, obs = load_checkpoint(run)
+        rewind_logs(run)
+        run.timer.update(step=global_step)
+        print(f"resumed {run.dir} at step {global_step} of {cfg.total_timesteps}", flush=True)
     else:
-        run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
-        print(f"run folder: {run_dir}  (device: {device})", flush=True)
-    timer = dict(start=start_time, time=time.time(), step=global_step, rate=float("nan"))
+        run.dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
+        print(f"run folder: {run.dir}  (device: {device})", flush=True)
     first_step = global_step
 
-    with CtrlC() as ctrl_c:
+    with run.ctrl_c:
         try:
             for global_step in range(first_step + 1, cfg.total_timesteps + 1):
                 learning = global_step > cfg.start_steps  # after the random warm-up
@@ -574,76 +615,61 @@ def train(cfg: Config):
                         a = actor(torch.as_tensor(obs, dtype=torch.float32, device=device))
                         a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian noise
                         action = torch.clamp(a, low_t, high_t).cpu().numpy()
-                next_obs, reward, terminated, truncated, _ = env.step(action)
+                next_obs, reward, terminated, truncated, info = env.step(action)
 
                 # --- store: with terminated, not truncated (see ReplayBuffer.add) ---
                 buffer.add(obs, action, reward, next_obs, terminated)
                 obs = next_obs  # the transition is stored; the next action starts from here
-                ep_return += float(reward)
                 if terminated or truncated:
-                    episodes.append((global_step, ep_return))
+                    run.episodes.append((global_step, info["episode"]["r"]))  # its return
                     obs, _ = env.reset()
-                    ep_return = 0.0
 
                 # --- learn: one critic and one actor update per env step ---
                 if learning:
                     losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt,
                                          critic_opt, buffer.sample(cfg.batch_size), cfg)
 
-                # --- evaluate: mu(s) without noise (in the warm-up once, as a baseline) ---
-                if global_step % cfg.eval_every == 0 and (learning or not evaluations):
-                    returns = common.evaluate(cfg.env_id, deterministic(actor, device),
-                                              cfg.eval_episodes, cfg.eval_seed)
-                    evaluations.append((global_step, float(np.mean(returns)),
-                                        float(np.std(returns))))
-
-                # --- plumbing: logs, saved models, checkpoints, a Ctrl-C that waited ---
-                after_step(global_step, cfg, run_dir, actor, episodes, evaluations, losses, timer)
-                last = global_step == cfg.total_timesteps  # kept: --total-timesteps may extend it
-                if global_step % cfg.checkpoint_every == 0 or ctrl_c.pressed or last:
-                    save_checkpoint(run_dir, cfg, nets, buffer, env, dict(
-                        global_step=global_step, obs=obs, ep_return=ep_return,
-                        episodes=episodes, evaluations=evaluations))
-                if ctrl_c.pressed:
-                    raise KeyboardInterrupt
+                # --- evaluate every eval_every steps; logs, checkpoints (plumbing) ---
+                after_step(run, global_step, obs, losses)
             interrupted = False
         except KeyboardInterrupt:
             interrupted = True
         finally:
             env.close()
 
-    learned_from, since = timer.get("learning_since", (global_step, time.time()))
+    learned_from, since = run.timer.get("learning_since", (global_step, time.time()))
     learned = global_step - learned_from
     rate = learned / (time.time() - since) if learned > 0 else float("nan")
-    result = dict(run_dir=run_dir, global_step=global_step, evaluations=evaluations,
-                  episodes=episodes, steps_per_second=rate, interrupted=interrupted)
+    result = dict(run_dir=run.dir, global_step=global_step, evaluations=run.evaluations,
+                  episodes=run.episodes, steps_per_second=rate, interrupted=interrupted)
     if interrupted:
-        saved = torch.load(run_dir / "checkpoint.pt", weights_only=True)["global_step"] \
-            if (run_dir / "checkpoint.pt").exists() else None
+        saved = (torch.load(run.dir / "checkpoint.pt", weights_only=True, mmap=True)["global_step"]
+                 if (run.dir / "checkpoint.pt").exists() else None)
         where = (f"its checkpoint is at step {saved}: continue with `python ddpg_walker.py "
-                 f"--resume {run_dir}`" if saved else "no checkpoint was written yet")
+                 f"--resume {run.dir}`" if saved else "no checkpoint was written yet")
         print(f"\ninterrupted at step {global_step}; {where}", flush=True)
         return result
     print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor "
-          f"update per step, evaluations included); run folder: {run_dir}", flush=True)
+          f"update per step, evaluations included); run folder: {run.dir}", flush=True)
     if cfg.gifs:
         for name, net in (("before.gif", untrained), ("after.gif", actor)):
-            ret = common.record_gif(cfg.env_id, deterministic(net, device), run_dir / name,
+            ret = common.record_gif(cfg.env_id, deterministic(net, device), run.dir / name,
                                     cfg.eval_seed, **GIF, **CAMERA)
-            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+            print(f"{name}: return {ret:.0f} -> {run.dir / name}", flush=True)
     return result
 
 
-def rewind_logs(run_dir, episodes, evaluations):
+def rewind_logs(run):
     """On resume: rewrite the CSV logs as they were at the checkpoint. Rows a killed run
     wrote after its last checkpoint go; the resumed run writes them again, identically."""
-    for stale in run_dir.glob("*.tmp*"):  # a write that a kill cut short
+    for stale in run.dir.glob("*.tmp*"):  # a write that a kill cut short
         stale.unlink()
-    for name, rows in (("episodes.csv", [episode_row(*e) for e in episodes]),
-                       ("evaluations.csv", [evaluation_row(e, episodes) for e in evaluations])):
-        (run_dir / name).unlink(missing_ok=True)
+    for name, rows in (("episodes.csv", [episode_row(*e) for e in run.episodes]),
+                       ("evaluations.csv", [evaluation_row(e, run.episodes)
+                                            for e in run.evaluations])):
+        (run.dir / name).unlink(missing_ok=True)
         for row in rows:
-            common.append_csv(run_dir / name, row)
+            common.append_csv(run.dir / name, row)
 
 
 def play(cfg: Config):
