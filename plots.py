@@ -1,9 +1,11 @@
 """Learning curves from run folders: each run's curve.png, and several runs compared.
 
 The scripts call draw_run(run_dir) after training (DDPG: after every evaluation) to
-write run_dir/curve.png. From the command line, overlay the runs of one or more
-scripts in one picture: runs of the same script become one mean line with a band
-from the lowest to the highest run, one colour per script.
+write run_dir/curve.png. From the command line, compare runs: one panel per env, titled
+with it and labelled with what it plots (CartPole scripts: the mean return of the last
+20 training episodes; DDPG: the evaluation return); in it, one colour per script, each
+run a thin line that ends where the run stopped, and the mean of a script's runs (thick)
+over the steps where all of them ran.
 
     python plots.py runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> compare.png
     python plots.py runs/ddpg_walker__* --out walker.png
@@ -17,6 +19,7 @@ CleanRL's tag names, so that our runs and CleanRL's overlay in one TensorBoard.
 import argparse
 import csv
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -149,41 +152,71 @@ def to_tensorboard(run_dir, sps=None):
             writer.add_scalar("charts/SPS", sps, int(step))
 
 
+EVAL_RETURN = "evaluation return (mean of its episodes, no exploration noise)"
+MEAN20 = "mean return of the last 20 training episodes"
+
+
 def curve_of(run_dir):
-    """(steps, returns) of one run: DDPG's evaluation means, or CartPole's mean of 20."""
+    """(steps, values, what the values are) of one run, points without a value dropped:
+    DDPG's evaluation means (evaluations.csv), or the CartPole scripts' mean return of the
+    last 20 finished training episodes after each update (progress.csv)."""
     if (run_dir / "evaluations.csv").exists():
-        ev = read_csv(run_dir / "evaluations.csv")
-        return ev["global_step"], ev["eval_mean"], "evaluation return"
-    pr = read_csv(run_dir / "progress.csv")
-    return pr["global_step"], pr["return_mean20"], "mean return of the last 20 episodes"
+        table, column, what = read_csv(run_dir / "evaluations.csv"), "eval_mean", EVAL_RETURN
+    else:
+        table, column, what = read_csv(run_dir / "progress.csv"), "return_mean20", MEAN20
+    steps, values = table.get("global_step", np.array([])), table.get(column, np.array([]))
+    ok = np.isfinite(values)  # nan before the first finished episode
+    return steps[ok], values[ok], what
 
 
-def compare(run_dirs, out):
-    """Overlay runs: per script, the mean over its runs and a band from lowest to highest."""
-    groups = {}  # script -> its runs' curves
+def compare_figure(run_dirs):
+    """The figure of compare(): one panel per env and measure, titled with the env and
+    labelled with what it plots. Per script, each run as a thin line that ends where the run
+    stopped (a run solved early is not drawn on past its end), and their mean (thick) over
+    the steps where every one of them has a value."""
+    panels = {}  # (env, what) -> {script: [(steps, values), ...]}
     for run_dir in map(Path, run_dirs):
         if not ((run_dir / "progress.csv").exists() or (run_dir / "evaluations.csv").exists()):
             print(f"error: {run_dir} is not a run folder (no progress.csv or evaluations.csv)",
                   file=sys.stderr)
             sys.exit(2)
-        groups.setdefault(run_dir.name.split("__")[0], []).append(curve_of(run_dir))
+        parts = run_dir.name.split("__")  # <script>__<env>__seed<k>__<time>
+        steps, values, what = curve_of(run_dir)
+        if not len(steps):
+            print(f"note: {run_dir} has nothing to draw yet; left out", file=sys.stderr)
+            continue
+        env = parts[1] if len(parts) > 1 else "env unknown"
+        panels.setdefault((env, what), {}).setdefault(parts[0], []).append((steps, values))
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    last = max(steps.max() for curves in groups.values() for steps, _, _ in curves)
-    grid = np.linspace(0, last, 200)  # one x axis for all
-    for color, (script, curves) in enumerate(groups.items()):
-        # A run that stopped early (solved) keeps its last value to the end of the grid.
-        ys = np.array([np.interp(grid, steps, np.nan_to_num(y, nan=0.0)) for steps, y, _ in curves])
-        runs = f"{len(curves)} run{'s' if len(curves) > 1 else ''}"
-        ax.plot(grid, ys.mean(0), color=f"C{color}", lw=2, label=f"{script} ({runs})")
-        if len(curves) > 1:
-            ax.fill_between(grid, ys.min(0), ys.max(0), color=f"C{color}", alpha=0.2)
-    ax.set_xlabel("env steps")
-    ax.set_ylabel(curves[0][2])
-    ax.legend(fontsize=8)
+    fig, axes = plt.subplots(max(len(panels), 1), 1, figsize=(7, 1 + 3.5 * max(len(panels), 1)),
+                             squeeze=False)
+    for ax, ((env, what), scripts) in zip(axes[:, 0], panels.items()):
+        for color, (script, curves) in enumerate(scripts.items()):
+            alone = len(curves) == 1
+            for steps, values in curves:  # each run's line ends where the run stopped
+                ax.plot(steps, values, color=f"C{color}", lw=2 if alone else 0.8,
+                        alpha=1 if alone else 0.4)
+            label = f"{script}: 1 run"
+            lo, hi = max(s[0] for s, _ in curves), min(s[-1] for s, _ in curves)
+            if len(curves) > 1 and lo < hi:  # the mean where every run has a value: no stretch
+                grid = np.linspace(lo, hi, 200)
+                mean = np.mean([np.interp(grid, s, v) for s, v in curves], axis=0)
+                ax.plot(grid, mean, color=f"C{color}", lw=2)
+                label = f"{script}: {len(curves)} runs (thin), their mean while all ran"
+            ax.plot([], [], color=f"C{color}", lw=2, label=label)
+        ax.set_title(env, fontsize=10)
+        ax.set_xlabel("env steps")
+        ax.set_ylabel(textwrap.fill(what, 34), fontsize=8)
+        ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
+    return fig
+
+
+def compare(run_dirs, out):
+    """Write compare.png (see compare_figure) to `out`; returns `out`."""
+    fig = compare_figure(run_dirs)
     fig.savefig(out, dpi=90)
-    plt.close(fig)
+    pyplot().close(fig)
     return out
 
 

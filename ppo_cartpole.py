@@ -103,20 +103,24 @@ class Config:
     print_every: int = 10
     """print a progress line every this many updates"""
     gifs: bool = True
-    """write before.gif (untrained policy) and after.gif (trained policy) to the run folder"""
+    """write before.gif (untrained policy) and after.gif (trained policy) to the run folder:
+    one episode each, actions drawn from pi as in training (and in tutorial 004's GIFs)"""
     tensorboard: bool = False
     """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
     names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
     curves: bool = True
     """draw curve.png (returns and the update's diagnostics against env steps) after training"""
     eval_episodes: int = 10
-    """greedy episodes played after training (and by --eval)"""
+    """episodes played after training (and by --eval) twice: actions drawn from pi, then
+    pi's most probable action (greedy); both mean returns are printed"""
     eval_seed: int = 10_000
-    """seed of the evaluation env, kept apart from the training seeds"""
+    """seed of the evaluation env and its action draws, kept apart from the training seeds"""
     watch: bool = False
-    """after training (or with --eval), play the policy in a window; needs a display"""
+    """after training (or with --eval), play the policy (actions drawn from pi) in a window;
+    needs a display"""
     eval: str | None = None
-    """a saved model.pt or its run folder: skip training, play eval_episodes greedy episodes"""
+    """a saved model.pt or its run folder: skip training, play eval_episodes episodes (as
+    after training: actions drawn from pi, then greedy)"""
     threads: int = 1
     """torch CPU threads. 1 is fastest for networks this small (see the README)"""
     cuda: bool = False
@@ -281,18 +285,27 @@ def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret,
 # =============================================================================
 
 
-def greedy(policy, device):
-    """obs -> the most probable action; for evaluation and GIFs."""
+def act_fn(policy, device, seed, greedy=False):
+    """obs -> action, for evaluation and GIFs: drawn from pi(.|s) as in training (and as
+    tutorial 004 draws its GIFs), or with greedy=True pi's most probable action. The draws
+    come from their own generator, seeded with `seed`: an evaluation replays exactly."""
+    rng = np.random.default_rng(seed)
+
     def act(obs):
         with torch.no_grad():
-            return int(policy(torch.as_tensor(obs, dtype=torch.float32, device=device)).argmax())
+            logits = policy(torch.as_tensor(obs, dtype=torch.float32, device=device))
+        if greedy:
+            return int(logits.argmax())
+        probs = torch.softmax(logits.double(), -1).cpu().numpy()  # float64: sums to 1 for numpy
+        return int(rng.choice(len(probs), p=probs))  # a ~ pi(.|s), tutorial 004's np.random.choice
     return act
 
 
 def train(cfg: Config):
     """Train PPO-clip with `cfg`. Returns a dict: run_dir, solved, global_step,
     solved_step (or None), episode_returns (all finished training episodes),
-    eval_returns (greedy episodes after training) and interrupted."""
+    eval_returns (episodes after training, actions drawn from pi), greedy_returns (the same
+    episode seeds, pi's most probable action) and interrupted."""
     start_time = time.time()
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
@@ -413,42 +426,57 @@ def train(cfg: Config):
 
     result = dict(run_dir=run_dir, solved=solved_step is not None, solved_step=solved_step,
                   global_step=global_step, episode_returns=episode_returns, eval_returns=[],
-                  interrupted=interrupted)
+                  greedy_returns=[], interrupted=interrupted)
     if interrupted:
         return result
     elapsed = time.time() - start_time
     print(f"trained {global_step} steps, {len(episode_returns)} episodes in {elapsed:.1f}s; "
           f"model: {run_dir / 'model.pt'}", flush=True)
 
-    # --- after training: the learning curve, greedy evaluation and GIFs ---
+    # --- after training: the learning curve, evaluation and GIFs ---
     if cfg.curves:
         print(f"curve: {plots.draw_run(run_dir, threshold, solved_step)}", flush=True)
     if cfg.tensorboard:
         plots.to_tensorboard(run_dir, sps=global_step / elapsed)
-    returns = common.evaluate(cfg.env_id, greedy(policy, device), cfg.eval_episodes, cfg.eval_seed)
-    print(f"greedy evaluation over {cfg.eval_episodes} episodes: mean {np.mean(returns):.1f}, "
+    # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
+    # policy that "solved" judged), and pi's most probable action (greedy). They can differ
+    # either way: a policy trained to be sampled need not be good when it is not.
+    n = cfg.eval_episodes
+    returns = common.evaluate(cfg.env_id, act_fn(policy, device, cfg.eval_seed), n, cfg.eval_seed)
+    print(f"evaluation over {n} episodes, actions drawn from pi: mean {np.mean(returns):.1f}, "
           f"min {min(returns):.0f}", flush=True)
-    result["eval_returns"] = returns
-    if cfg.gifs:  # every 2nd frame at half size: small files
+    greedy_returns = common.evaluate(cfg.env_id, act_fn(policy, device, cfg.eval_seed, greedy=True),
+                                     n, cfg.eval_seed)
+    print(f"greedy evaluation over {n} episodes (pi's most probable action): mean "
+          f"{np.mean(greedy_returns):.1f}, min {min(greedy_returns):.0f}", flush=True)
+    result["eval_returns"], result["greedy_returns"] = returns, greedy_returns
+    if cfg.gifs:  # one episode each, actions drawn from pi: after.gif shows the evaluation's
+        # first episode. Every 2nd frame at half size: small files.
         for name, net in (("before.gif", untrained), ("after.gif", policy)):
-            ret = common.record_gif(cfg.env_id, greedy(net, device), run_dir / name, cfg.eval_seed,
-                                    every=2, scale=2)
+            ret = common.record_gif(cfg.env_id, act_fn(net, device, cfg.eval_seed), run_dir / name,
+                                    cfg.eval_seed, every=2, scale=2)
             print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
     return result
 
 
 def play(cfg: Config):
-    """--eval PATH: load a saved model and play cfg.eval_episodes greedy episodes."""
+    """--eval PATH: load a saved model, play cfg.eval_episodes episodes with actions drawn from
+    pi (shown with --watch), then as many greedy ones. Returns the first ones' returns."""
     ckpt = common.load_checkpoint(cfg.eval, required=("policy", "obs_dim", "n_actions", "config"))
     policy = PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
     common.load_weights(policy, ckpt["policy"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
     print(f"playing {cfg.eval_episodes} episodes of {env_id} with {cfg.eval}"
           + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
-    returns = common.evaluate(env_id, greedy(policy, "cpu"), cfg.eval_episodes, cfg.eval_seed,
-                              render_mode="human" if cfg.watch else None, log=cfg.watch)
+    returns = common.evaluate(env_id, act_fn(policy, "cpu", cfg.eval_seed), cfg.eval_episodes,
+                              cfg.eval_seed, render_mode="human" if cfg.watch else None,
+                              log=cfg.watch)
     print(f"{env_id}, {cfg.eval}: returns {[round(r) for r in returns]}, "
-          f"mean {np.mean(returns):.1f}", flush=True)
+          f"mean {np.mean(returns):.1f} (actions drawn from pi)", flush=True)
+    greedy_returns = common.evaluate(env_id, act_fn(policy, "cpu", cfg.eval_seed, greedy=True),
+                                     cfg.eval_episodes, cfg.eval_seed)
+    print(f"greedy (pi's most probable action): returns {[round(r) for r in greedy_returns]}, "
+          f"mean {np.mean(greedy_returns):.1f}", flush=True)
     return returns
 
 

@@ -12,8 +12,9 @@ from test_cartpole_scripts import assert_curve_drawn
 
 
 def quick_run(tmp_path, seed, **kw):
-    return ppo.train(ppo.Config(seed=seed, total_timesteps=1024, stop_when_solved=False, gifs=False,
-                                eval_episodes=1, run_dir=str(tmp_path), print_every=10**6, **kw))
+    return ppo.train(ppo.Config(**{**dict(seed=seed, total_timesteps=1024, stop_when_solved=False,
+                                          gifs=False, eval_episodes=1, run_dir=str(tmp_path),
+                                          print_every=10**6), **kw}))
 
 
 def test_tensorboard_scalars_use_cleanrl_tags(tmp_path):
@@ -71,3 +72,45 @@ def test_curve_of_a_run_in_which_no_episode_finished(tmp_path):
     run = ppo.train(ppo.Config(env_id="Acrobot-v1", total_timesteps=256, gifs=False,
                                eval_episodes=1, run_dir=str(tmp_path), print_every=10**6))["run_dir"]
     assert not (run / "episodes.csv").exists() and (run / "curve.png").exists()
+
+
+def fake_ddpg_run(root, env_id, last_step):
+    """A run folder of ddpg_walker.py as plots.py reads it: evaluations.csv every 5000 steps."""
+    run = root / f"ddpg_walker__{env_id}__seed0__20260101-000000"
+    run.mkdir(parents=True)
+    rows = ["global_step,eval_mean,eval_std,episodes,train_return_mean10"]
+    rows += [f"{s},{s / 100},1.0,{s // 1000},{s / 200}" for s in range(5000, last_step + 1, 5000)]
+    (run / "evaluations.csv").write_text("\n".join(rows) + "\n")
+    return run
+
+
+def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path):
+    """`plots.py runs/*` with CartPole runs of two lengths and a Walker2d run: a panel per
+    env, each labelled with what it plots; no line goes on past the end of the runs it
+    is drawn from (a run that stopped is not stretched to the longest)."""
+    import plots
+
+    short, long = (quick_run(tmp_path, seed, total_timesteps=steps, curves=False)["run_dir"]
+                   for seed, steps in ((0, 1024), (1, 3072)))
+    walker = fake_ddpg_run(tmp_path, "Walker2d-v5", 60_000)
+    fig = plots.compare_figure([short, long, walker])
+    panels = {ax.get_title(): ax for ax in fig.axes}
+    assert set(panels) == {"CartPole-v1", "Walker2d-v5"}
+    assert "mean return of the last 20 training episodes" in \
+        " ".join(panels["CartPole-v1"].get_ylabel().split())
+    assert "evaluation return" in " ".join(panels["Walker2d-v5"].get_ylabel().split())
+    curves = {run: plots.read_csv(run / "progress.csv") for run in (short, long)}
+    short_end = curves[short]["global_step"][-1]
+    drawn = [(line.get_xdata(), line.get_ydata()) for line in panels["CartPole-v1"].lines
+             if len(line.get_xdata())]
+    assert len(drawn) == 3  # each run, and their mean
+    for x, y in drawn:
+        assert x.max() <= curves[long]["global_step"][-1]
+        if x.max() > short_end:  # only the long run itself goes on past the short run's end
+            assert list(x) == list(curves[long]["global_step"])
+            assert list(y) == list(curves[long]["return_mean20"])
+    walker_x = [line.get_xdata() for line in panels["Walker2d-v5"].lines if len(line.get_xdata())]
+    assert [x.max() for x in walker_x] == [60_000]
+    p = run_script("plots.py", short, long, walker, "--out", tmp_path / "compare.png")
+    assert p.returncode == 0, p.stderr
+    assert_curve_drawn(tmp_path / "compare.png")
