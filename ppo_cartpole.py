@@ -26,6 +26,8 @@ early stop at 1.5 x target_kl). The loop, top to bottom:
 
 from __future__ import annotations
 
+import common  # first: it turns a Ctrl-C while torch loads into one line (see its top)
+
 import copy
 import dataclasses
 import time
@@ -37,7 +39,6 @@ import torch
 import torch.nn as nn
 from torch.distributions import Categorical
 
-import common
 import plots
 
 
@@ -51,7 +52,9 @@ class Config:
     total_timesteps: int = 100_000
     """budget of env steps (all envs together); training usually stops long before, when solved"""
     stop_when_solved: bool = True
-    """stop once the mean return of the last 20 finished episodes reaches the solved return"""
+    """stop once the mean return of the last 20 finished episodes reaches the solved return
+    and pi as it is then does too, over eval_episodes episodes with actions drawn from pi
+    (env seed eval_seed + 1); checked at most once per update, training goes on until then"""
     solved_return: float | None = None
     """the return that counts as solved; none = the env's reward_threshold (CartPole-v1: 475)"""
 
@@ -73,8 +76,9 @@ class Config:
     discounted returns up to ~100, become at most ~5, which the critic fits within a few
     steps (1 = off; 0.01 .. 1)"""
     lam: float = 0.95
-    """GAE lambda: 0 = one-step TD advantages (low variance), 1 = Monte Carlo (no bias);
-    usually 0.9 .. 0.97"""
+    """GAE lambda (usually 0.9 .. 0.97): 0 = one-step TD errors r + gamma V(s') - V(s) (low
+    variance, biased by V); 1 = the discounted rewards to the episode's end minus V(s), still
+    bootstrapped from V where the rollout or a time limit cuts the episode (less bias)"""
     update_epochs: int = 10
     """passes over each batch (tutorial 000: 10; 3 .. 30)"""
     num_minibatches: int = 4
@@ -114,7 +118,8 @@ class Config:
     """episodes played after training (and by --eval) twice: actions drawn from pi, then
     pi's most probable action (greedy); both mean returns are printed"""
     eval_seed: int = 10_000
-    """seed of the evaluation env and its action draws, kept apart from the training seeds"""
+    """seed of the evaluation env and its action draws, kept apart from the training seeds
+    (the stop check uses eval_seed + 1)"""
     watch: bool = False
     """after training (or with --eval), play the policy (actions drawn from pi) in a window;
     needs a display"""
@@ -122,7 +127,8 @@ class Config:
     """a saved model.pt or its run folder: skip training, play eval_episodes episodes (as
     after training: actions drawn from pi, then greedy)"""
     threads: int = 1
-    """torch CPU threads. 1 is fastest for networks this small (see the README)"""
+    """torch CPU threads (1 .. cores); the same seed gives the same logs only with the same
+    count (threads change float sums). Networks this small have little work to share out"""
     cuda: bool = False
     """train on the GPU if there is one (CartPole's tiny networks are faster on the CPU)"""
 
@@ -301,6 +307,19 @@ def act_fn(policy, device, seed, greedy=False):
     return act
 
 
+def holds(policy, device, cfg, threshold, step):
+    """Does pi, as it is now, also reach `threshold`: the mean return of cfg.eval_episodes
+    episodes, actions drawn from pi, env and draws seeded with eval_seed + 1 (apart from
+    training and from the evaluation after it)? Says what it found in one line."""
+    returns = common.evaluate(cfg.env_id, act_fn(policy, device, cfg.eval_seed + 1),
+                              cfg.eval_episodes, cfg.eval_seed + 1)
+    held = np.mean(returns) >= threshold
+    print(f"check at step {step}: pi as it is now averages {np.mean(returns):.1f} over "
+          f"{len(returns)} episodes: " + ("it holds, training stops" if held else
+                                         f"below {threshold:g}, training goes on"), flush=True)
+    return held
+
+
 def train(cfg: Config):
     """Train PPO-clip with `cfg`. Returns a dict: run_dir, solved, global_step,
     solved_step (or None), episode_returns (all finished training episodes),
@@ -310,7 +329,7 @@ def train(cfg: Config):
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
-    device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
+    device = common.pick_device(cfg.cuda)  # --cuda without a GPU: one line, then the CPU
     envs, next_obs, threshold = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed,
                                                     cfg.solved_return)
     obs_dim = int(envs.single_observation_space.shape[0])
@@ -336,6 +355,7 @@ def train(cfg: Config):
     # the first of the new episode. `autoreset` marks envs whose next step is one.
     autoreset = np.zeros(N, dtype=bool)
     global_step, solved_step, update, interrupted, stats = 0, None, 0, False, {}
+    checked, stopped = 0, False  # the last update at which pi was checked; whether it held
 
     def log(stats):  # one progress.csv row: the state of training now
         common.append_csv(run_dir / "progress.csv", dict(
@@ -367,14 +387,21 @@ def train(cfg: Config):
                         episode_returns.append(float(ep_return))
                         episode_steps.append(global_step)
                         last20.append(float(ep_return))
-                if solved_step is None and len(last20) == 20 and np.mean(last20) >= threshold:
+                solved_now = len(last20) == 20 and np.mean(last20) >= threshold
+                if solved_now and solved_step is None:
                     solved_step = global_step
                     print(f"solved: mean return of the last 20 episodes {np.mean(last20):.1f} >= "
                           f"{threshold:g} at step {global_step} (episode {len(episode_returns)}) "
                           f"after {time.time() - start_time:.1f}s", flush=True)
-                    if cfg.stop_when_solved:
+                # Stop once solved, if pi as it is now holds too: the last 20 episodes were played
+                # by the policies of several updates, and the latest update can have undone what
+                # they show. Checked at most once per update.
+                if solved_now and cfg.stop_when_solved and checked != update:
+                    checked = update
+                    stopped = holds(policy, device, cfg, threshold, global_step)
+                    if stopped:
                         break
-            if solved_step is not None and cfg.stop_when_solved:
+            if stopped:
                 # The last row shows where training ended; the partial rollout trains nothing.
                 log(dict.fromkeys(stats, float("nan")))
                 break
@@ -403,6 +430,8 @@ def train(cfg: Config):
             b_adv, b_ret = advantages.reshape(-1)[keep], returns.reshape(-1)[keep]
             stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_adv, b_ret,
                                cfg)
+            # nan or inf in the losses, the weights or their output: one line, no run folder
+            common.stop_if_diverged(global_step, stats, (policy, value_net), run_dir, obs=next_obs)
 
             # --- logging ---
             log(stats)
@@ -415,19 +444,31 @@ def train(cfg: Config):
                       f"clipfrac {stats['clipfrac']:.3f}  {elapsed:.1f}s", flush=True)
     except KeyboardInterrupt:
         interrupted = True
-        print("\ninterrupted: saving the model and the logs", flush=True)
+    except (ValueError, RuntimeError):  # e.g. Categorical refusing nan logits: diverged?
+        # If so, one line: stop_if_diverged finds the nan in the weights or in their output.
+        common.stop_if_diverged(global_step, {}, (policy, value_net), run_dir, obs=next_obs)
+        raise
     finally:
         envs.close()
-        for step, ep_return in zip(episode_steps, episode_returns):
-            common.append_csv(run_dir / "episodes.csv", {"global_step": step, "return": ep_return})
-        common.save_checkpoint(dict(policy=policy.state_dict(), value=value_net.state_dict(),
-                                    config=asdict(cfg), obs_dim=obs_dim, n_actions=n_actions,
-                                    global_step=global_step), run_dir / "model.pt")
+        if run_dir.exists():  # common.stop_if_diverged removes a diverged run's folder
+            for step, ep_return in zip(episode_steps, episode_returns):
+                common.append_csv(run_dir / "episodes.csv",
+                                  {"global_step": step, "return": ep_return})
+            common.save_checkpoint(dict(script="ppo_cartpole", policy=policy.state_dict(),
+                                        value=value_net.state_dict(), config=asdict(cfg),
+                                        obs_dim=obs_dim, n_actions=n_actions,
+                                        global_step=global_step), run_dir / "model.pt")
 
     result = dict(run_dir=run_dir, solved=solved_step is not None, solved_step=solved_step,
                   global_step=global_step, episode_returns=episode_returns, eval_returns=[],
                   greedy_returns=[], interrupted=interrupted)
-    if interrupted:
+    if interrupted:  # the curve so far and where everything is; main() exits with 130
+        if cfg.curves and (run_dir / "progress.csv").exists():
+            with common.ctrl_c_deferred():  # a second Ctrl-C waits for the picture
+                plots.draw_run(run_dir, threshold, solved_step)
+        print(f"\ninterrupted at step {global_step}: {run_dir} holds "
+              f"{', '.join(sorted(f.name for f in run_dir.iterdir()))} "
+              f"(replay: python ppo_cartpole.py --eval {run_dir})", flush=True)
         return result
     elapsed = time.time() - start_time
     print(f"trained {global_step} steps, {len(episode_returns)} episodes in {elapsed:.1f}s; "
@@ -435,7 +476,8 @@ def train(cfg: Config):
 
     # --- after training: the learning curve, evaluation and GIFs ---
     if cfg.curves:
-        print(f"curve: {plots.draw_run(run_dir, threshold, solved_step)}", flush=True)
+        with common.ctrl_c_deferred():  # Ctrl-C waits until curve.png is whole
+            print(f"curve: {plots.draw_run(run_dir, threshold, solved_step)}", flush=True)
     if cfg.tensorboard:
         plots.to_tensorboard(run_dir, sps=global_step / elapsed)
     # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
@@ -462,7 +504,8 @@ def train(cfg: Config):
 def play(cfg: Config):
     """--eval PATH: load a saved model, play cfg.eval_episodes episodes with actions drawn from
     pi (shown with --watch), then as many greedy ones. Returns the first ones' returns."""
-    ckpt = common.load_checkpoint(cfg.eval, required=("policy", "obs_dim", "n_actions", "config"))
+    ckpt = common.load_checkpoint(cfg.eval, script="ppo_cartpole",
+                                  required=("policy", "obs_dim", "n_actions", "config"))
     policy = PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
     common.load_weights(policy, ckpt["policy"], cfg.eval)
     env_id = ckpt["config"]["env_id"]

@@ -6,6 +6,7 @@ import re
 
 import numpy as np
 import pytest
+import torch
 
 import common
 from conftest import ROOT
@@ -42,3 +43,38 @@ def test_gifs_draw_actions_from_pi_and_after_gif_is_the_first_evaluation(name, t
     # Both evaluations are reported, each over eval_episodes episodes.
     assert len(result["eval_returns"]) == len(result["greedy_returns"]) == 3
     assert "actions drawn from pi" in out and "greedy evaluation" in out
+
+
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_a_solved_run_stops_only_once_pi_as_it_is_now_holds(name, tmp_path, monkeypatch):
+    """The last 20 episodes come from several updates' policies; training stops when they
+    are solved and the current pi, checked (at most once per update), holds as well."""
+    script = importlib.import_module(name)
+    checks = []  # the env step of each check
+
+    def holds(net, device, cfg, threshold, step):
+        checks.append(step)
+        return len(checks) == 3  # the first two checks find pi falling short
+
+    monkeypatch.setattr(script, "holds", holds)
+    result = script.train(script.Config(run_dir=str(tmp_path), solved_return=30, gifs=False,
+                                        curves=False, eval_episodes=1, print_every=10**6))
+    assert result["solved"] and len(checks) == 3
+    assert checks[0] == result["solved_step"] < checks[1] < checks[2] == result["global_step"]
+    log = (result["run_dir"] / "progress.csv").read_text().splitlines()
+    batch = script.Config().num_envs * script.Config().num_steps
+    assert len({(step - 1) // batch for step in checks}) == 3  # never twice in one rollout
+    assert log[-1].startswith(f"{result['global_step']},")  # the last row: where it stopped
+
+
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_the_check_plays_the_current_pi(name, capsys):
+    """An untrained pi (episodes of a few dozen steps) holds at 10, not at 475."""
+    script = importlib.import_module(name)
+    cfg = script.Config(eval_episodes=3)
+    torch.manual_seed(0)  # an init whose greedy policy falls at once (some balance for 500)
+    net = (script.PolicyNetwork(4, 2, cfg.hidden) if hasattr(script, "PolicyNetwork")
+           else script.ActorCritic(4, 2, cfg.hidden))
+    assert script.holds(net, "cpu", cfg, 10, step=0)
+    assert not script.holds(net, "cpu", cfg, 475, step=0)
+    assert "check at step 0: pi as it is now averages" in capsys.readouterr().out
