@@ -621,7 +621,7 @@ def train(cfg: Config):
                 buffer.add(obs, action, reward, next_obs, terminated)
                 obs = next_obs  # the transition is stored; the next action starts from here
                 if terminated or truncated:
-                    run.episodes.append((global_step, info["episode"]["r"]))  # its return
+                    run.episodes.append((global_step, float(info["episode"]["r"])))  # return
                     obs, _ = env.reset()
 
                 # --- learn: one critic and one actor update per env step ---

@@ -195,6 +195,9 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
         assert frames[0].std() > 10  # a rendered scene, not a blank image
     ckpt = torch.load(run / "model.pt", weights_only=True)
     assert ckpt["global_step"] == 600 and ckpt["config"]["env_id"] == "Walker2d-v5"
+    # the full checkpoint loads as plain tensors and values (weights_only), Walker2d's numpy
+    # float64 rewards included
+    assert torch.load(run / "checkpoint.pt", weights_only=True)["global_step"] == 600
     # --eval replays the saved actor: same returns as the last evaluation.
     returns = ddpg.play(ddpg.Config(eval=str(run / "model.pt"), eval_episodes=2))
     assert np.mean(returns) == pytest.approx(result["evaluations"][-1][1])
