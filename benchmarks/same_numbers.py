@@ -1,0 +1,98 @@
+"""Same numbers? Run the scripts at fixed seeds and short budgets twice, once from a given
+git revision and once from the working tree as it is now, and compare the logs they write
+(progress.csv, episodes.csv, evaluations.csv) byte for byte.
+
+A change that only moves code around (a refactor, a comment, a rename) must print SAME for
+every file. Runs are serial, on the CPU, with one torch thread: same seed, same machine =>
+same bytes. A case whose flags one of the two revisions lacks is skipped, with a line.
+
+    python benchmarks/same_numbers.py                  # against HEAD (13 min on a busy 2-core CPU)
+    python benchmarks/same_numbers.py 070180b          # against any commit, tag or branch
+    python benchmarks/same_numbers.py HEAD~3 --only ppo   # only the cases whose name has "ppo"
+    python benchmarks/same_numbers.py /tmp/before      # against a copy of the scripts' folder
+
+Prints SAME or DIFFERENT per file, and exits 1 if any file differs or is missing on one side.
+"""
+
+import argparse
+import filecmp
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+LOGS = ("progress.csv", "episodes.csv", "evaluations.csv")
+CARTPOLE = ["--total-timesteps", "20000", "--eval-episodes", "3", "--no-gifs", "--no-curves"]
+# name: (script, flags). The CartPole budget is about where PPO solves: the solved check runs.
+CASES = {
+    **{f"{script}_seed{seed}": (f"{script}.py", ["--seed", str(seed), *CARTPOLE])
+       for script in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
+       for seed in (0, 1)},
+    "ppo_cartpole_target_kl": ("ppo_cartpole.py", ["--seed", "0", "--target-kl", "0.01",
+                                                   *CARTPOLE]),
+    "ddpg_walker_pendulum": ("ddpg_walker.py", [
+        "--env-id", "InvertedPendulum-v5", "--total-timesteps", "3000", "--start-steps", "1000",
+        "--eval-every", "1000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
+}
+
+
+def flags_known(tree, script, flags):
+    """Does `script` in `tree` take every --flag in `flags` (read from its --help)?"""
+    help_text = subprocess.run([sys.executable, script, "--help"], cwd=tree,
+                               capture_output=True, text=True).stdout
+    return all(f in help_text for f in flags if f.startswith("--"))
+
+
+def run(tree, script, flags, out):
+    """Run `script` from `tree` with its run folders under `out`; return the run folder."""
+    done = subprocess.run([sys.executable, script, *flags, "--run-dir", str(out)], cwd=tree,
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"{script} {' '.join(flags)} failed in {tree}:\n{done.stderr[-2000:]}")
+    (run_dir,) = Path(out).iterdir()  # one run, one folder
+    return run_dir
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("rev", nargs="?", default="HEAD",
+                        help="the git revision to compare with, or a folder holding the scripts")
+    parser.add_argument("--only", default="", help="only the cases whose name contains this")
+    args = parser.parse_args()
+    differ, folder = 0, Path(args.rev).is_dir()
+    with tempfile.TemporaryDirectory(prefix="same_numbers_") as tmp:
+        if folder:
+            old_tree = commit = Path(args.rev).resolve()
+        else:  # a temporary checkout of the revision, removed at the end
+            commit = subprocess.run(["git", "rev-parse", "--short", args.rev], cwd=ROOT,
+                                    text=True, capture_output=True, check=True).stdout.strip()
+            old_tree = Path(tmp) / "old_tree"
+            subprocess.run(["git", "worktree", "add", "--detach", "-q", str(old_tree), commit],
+                           cwd=ROOT, check=True)
+        try:
+            for name, (script, flags) in CASES.items():
+                if args.only not in name:
+                    continue
+                if not all(flags_known(tree, script, flags) for tree in (old_tree, ROOT)):
+                    print(f"{name}: skipped, a flag is missing at {commit} or now", flush=True)
+                    continue
+                old = run(old_tree, script, flags, Path(tmp) / name / "old")
+                new = run(ROOT, script, flags, Path(tmp) / name / "new")
+                for log in LOGS:
+                    a, b = old / log, new / log
+                    if not a.exists() and not b.exists():
+                        continue
+                    same = a.exists() and b.exists() and filecmp.cmp(a, b, shallow=False)
+                    differ += not same
+                    print(f"{name:28} {log:16} {'SAME' if same else 'DIFFERENT'}", flush=True)
+        finally:
+            if not folder:
+                subprocess.run(["git", "worktree", "remove", "--force", str(old_tree)], cwd=ROOT)
+    print(f"{'all SAME' if not differ else f'{differ} DIFFERENT'} (working tree vs {commit})")
+    sys.exit(1 if differ else 0)
+
+
+if __name__ == "__main__":
+    main()
