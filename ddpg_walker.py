@@ -33,6 +33,8 @@ every checkpoint_every steps a checkpoint.pt from which --resume continues the v
 
 from __future__ import annotations
 
+import common  # first: it turns a Ctrl-C while torch loads into one line (see its top)
+
 import copy
 import dataclasses
 import signal
@@ -47,8 +49,50 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-import common
 import plots
+
+
+# =============================================================================
+# Networks
+# =============================================================================
+
+
+class Actor(nn.Module):
+    """mu(s): observation -> action, squashed by tanh into the action box."""
+
+    def __init__(self, obs_dim, act_dim, hidden, low, high):
+        super().__init__()
+        self.l1 = nn.Linear(obs_dim, hidden)
+        self.l2 = nn.Linear(hidden, hidden)
+        self.l3 = nn.Linear(hidden, act_dim)
+        # tanh gives [-1, 1]; scale and shift it onto [low, high] (Walker2d: [-1, 1] already).
+        self.register_buffer("scale", torch.as_tensor((high - low) / 2, dtype=torch.float32))
+        self.register_buffer("bias", torch.as_tensor((high + low) / 2, dtype=torch.float32))
+
+    def forward(self, obs):
+        a = F.relu(self.l1(obs))
+        a = F.relu(self.l2(a))
+        return self.bias + self.scale * torch.tanh(self.l3(a))
+
+
+class Critic(nn.Module):
+    """Q(s, a). As in the DDPG paper and tutorial 003, the action joins at the second layer."""
+
+    def __init__(self, obs_dim, act_dim, hidden):
+        super().__init__()
+        self.l1 = nn.Linear(obs_dim, hidden)
+        self.l2 = nn.Linear(hidden + act_dim, hidden)
+        self.l3 = nn.Linear(hidden, 1)
+
+    def forward(self, obs, action):
+        q = F.relu(self.l1(obs))
+        q = F.relu(self.l2(torch.cat([q, action], dim=-1)))
+        return self.l3(q).squeeze(-1)  # (B,): squeeze so Q never broadcasts against (B,) targets
+
+
+# =============================================================================
+# Hyperparameters: every one once, here; --help prints the string under each
+# =============================================================================
 
 
 @dataclass
@@ -128,18 +172,15 @@ class Config:
 
     def __post_init__(self):
         common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
-        for name in ("total_timesteps", "batch_size", "hidden", "buffer_size", "eval_every",
-                     "eval_episodes", "checkpoint_every", "print_every", "actor_lr", "critic_lr",
-                     "threads"):
-            common.check(getattr(self, name) > 0,
-                         f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
+        common.check_ranges(
+            self, total_timesteps="> 0", batch_size="> 0", hidden="> 0", buffer_size="> 0",
+            eval_every="> 0", eval_episodes="> 0", checkpoint_every="> 0", print_every="> 0",
+            actor_lr="> 0", critic_lr="> 0", threads="> 0", expl_noise=">= 0", gamma="(0, 1]",
+            tau="(0, 1]")
         # The first update samples batch_size transitions: the warm-up must have stored that many.
         common.check(self.start_steps >= self.batch_size,
                      f"--start-steps must be at least --batch-size ({self.batch_size}), "
                      f"got {self.start_steps}")
-        common.check(self.expl_noise >= 0, f"--expl-noise must be >= 0, got {self.expl_noise}")
-        common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
-        common.check(0 < self.tau <= 1, f"--tau must be in (0, 1], got {self.tau}")
         common.check(self.resume or self.total_timesteps > self.start_steps,
                      f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
                      f"({self.start_steps}): learning starts after the warm-up")
@@ -147,44 +188,6 @@ class Config:
                      "--eval plays a saved actor and --resume continues training: pass one")
         common.check(not self.gif or self.eval,
                      "--gif writes a GIF of a saved actor: it needs --eval")
-
-
-# =============================================================================
-# Networks
-# =============================================================================
-
-
-class Actor(nn.Module):
-    """mu(s): observation -> action, squashed by tanh into the action box."""
-
-    def __init__(self, obs_dim, act_dim, hidden, low, high):
-        super().__init__()
-        self.l1 = nn.Linear(obs_dim, hidden)
-        self.l2 = nn.Linear(hidden, hidden)
-        self.l3 = nn.Linear(hidden, act_dim)
-        # tanh gives [-1, 1]; scale and shift it onto [low, high] (Walker2d: [-1, 1] already).
-        self.register_buffer("scale", torch.as_tensor((high - low) / 2, dtype=torch.float32))
-        self.register_buffer("bias", torch.as_tensor((high + low) / 2, dtype=torch.float32))
-
-    def forward(self, obs):
-        a = F.relu(self.l1(obs))
-        a = F.relu(self.l2(a))
-        return self.bias + self.scale * torch.tanh(self.l3(a))
-
-
-class Critic(nn.Module):
-    """Q(s, a). As in the DDPG paper and tutorial 003, the action joins at the second layer."""
-
-    def __init__(self, obs_dim, act_dim, hidden):
-        super().__init__()
-        self.l1 = nn.Linear(obs_dim, hidden)
-        self.l2 = nn.Linear(hidden + act_dim, hidden)
-        self.l3 = nn.Linear(hidden, 1)
-
-    def forward(self, obs, action):
-        q = F.relu(self.l1(obs))
-        q = F.relu(self.l2(torch.cat([q, action], dim=-1)))
-        return self.l3(q).squeeze(-1)  # (B,): squeeze so Q never broadcasts against (B,) targets
 
 
 # =============================================================================
@@ -375,6 +378,10 @@ def after_step(run, step, obs, losses):
     if run.episodes and run.episodes[-1][0] == step:
         common.append_csv(run.dir / "episodes.csv", episode_row(*run.episodes[-1]))
     if step % cfg.print_every == 0:
+        if losses is not None:  # nan or inf: stop with one line (a run with no checkpoint yet goes)
+            common.stop_if_diverged(step, dict(critic_loss=losses[0], actor_loss=losses[1]),
+                                    run.nets[:2], None if (run.dir / "checkpoint.pt").exists()
+                                    else run.dir)
         print(progress_line(step, cfg, run.episodes, losses, run.timer), flush=True)
     if step % cfg.eval_every == 0 and (step > cfg.start_steps or not run.evaluations):
         evaluate_and_save(run, step)
@@ -479,7 +486,8 @@ def save_checkpoint(run, step, obs):
 def load_checkpoint(run):
     """Put back what save_checkpoint saved; return the loop's (global_step, obs)."""
     path = run.dir / "checkpoint.pt"
-    ckpt = common.load_checkpoint(path, required=NETS + ("buffer", "env", "torch_rng", "obs"))
+    ckpt = common.load_checkpoint(path, required=NETS + ("buffer", "env", "torch_rng", "obs"),
+                                  script="ddpg_walker")
     for key, obj in zip(NETS, run.nets):
         common.load_weights(obj, ckpt[key], path)
     buffer, n = run.buffer, ckpt["buffer_count"]
@@ -534,9 +542,7 @@ def config_to_resume(cfg):
     """The saved run's Config, with the flags of MAY_CHANGE_ON_RESUME that this command set.
     A learning setting set to something else than the saved run's is refused."""
     path = Path(cfg.resume) / "checkpoint.pt"
-    saved = common.load_checkpoint(path, required=("config", "global_step"))
-    if saved.get("script") != "ddpg_walker":
-        raise common.UserError(f"{path} is not a checkpoint of ddpg_walker.py")
+    saved = common.load_checkpoint(path, required=("config", "global_step"), script="ddpg_walker")
     defaults = {f.name: f.default for f in dataclasses.fields(Config)}
     kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}
     for name, value in asdict(cfg).items():
@@ -677,10 +683,7 @@ def play(cfg: Config):
     of the saved actor without noise (in a window with --watch), or with --gif write one
     episode to a GIF file."""
     ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low",
-                                                      "high", "config"))
-    if ckpt.get("script", "ddpg_walker") != "ddpg_walker":
-        raise common.UserError(f"{cfg.eval} is a model of {ckpt['script']}.py, not of "
-                               "ddpg_walker.py")
+                                                      "high", "config"), script="ddpg_walker")
     actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"],
                   np.array(ckpt["low"]), np.array(ckpt["high"]))
     common.load_weights(actor, ckpt["actor"], cfg.eval)
