@@ -8,10 +8,24 @@ import csv
 import dataclasses
 import inspect
 import os
+import shutil
+import signal
 import sys
 import textwrap
 import time
 from pathlib import Path
+
+# --- Ctrl-C while a script starts (torch and gymnasium below take a second or more to import):
+# one line and exit 130, not a traceback through importlib. Only when a script beside this file
+# is the program (it imports common first), never in a notebook; clear_exit() takes over.
+def _ctrl_c_while_starting(signum, frame):
+    print("\ninterrupted (Ctrl-C)", file=sys.stderr, flush=True)
+    os._exit(130)  # nothing to save yet; an exception would pass through C import code
+
+_program = getattr(sys.modules.get("__main__"), "__file__", None)
+if (_program and Path(_program).resolve().parent == Path(__file__).resolve().parent
+        and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+    signal.signal(signal.SIGINT, _ctrl_c_while_starting)
 
 # --- headless machines: set before pygame or mujoco are imported; never overrides the user ---
 HEADLESS = sys.platform == "linux" and not any(map(os.environ.get, ("DISPLAY", "WAYLAND_DISPLAY")))
@@ -139,13 +153,14 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
     finally:
         env.close()
     tmp = Path(f"{path}.tmp")
-    try:
-        imageio.mimsave(tmp, frames, format="GIF", duration=1000 * every / fps, loop=0)
-        os.replace(tmp, path)
-    except OSError as e:
-        raise UserError(f"cannot write {path}: {e}") from None
-    finally:
-        tmp.unlink(missing_ok=True)
+    with ctrl_c_deferred():  # a Ctrl-C now waits until the GIF is whole (a second at most)
+        try:
+            imageio.mimsave(tmp, frames, format="GIF", duration=1000 * every / fps, loop=0)
+            os.replace(tmp, path)
+        except OSError as e:
+            raise UserError(f"cannot write {path}: {e}") from None
+        finally:
+            tmp.unlink(missing_ok=True)
     return total
 
 
@@ -156,15 +171,45 @@ class UserError(Exception):
 
 @contextlib.contextmanager
 def clear_exit():
-    """Bad input: one `error:` line, exit 2. Ctrl-C: one line, exit 130 (callers save first)."""
+    """Bad input: one `error:` line, exit 2. Ctrl-C: one line, exit 130 (callers save first),
+    also when a library turned it into another error (see from_ctrl_c)."""
+    if signal.getsignal(signal.SIGINT) is _ctrl_c_while_starting:  # the imports are done
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C: KeyboardInterrupt
     try:
         yield
     except UserError as e:
         print(f"error: {e}", file=sys.stderr, flush=True)
         sys.exit(2)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ImportError, RuntimeError, gym.error.Error) as e:
+        if not from_ctrl_c(e):
+            raise
         print("\ninterrupted (Ctrl-C)", file=sys.stderr, flush=True)
         sys.exit(130)
+
+def from_ctrl_c(error):
+    """Is `error` a KeyboardInterrupt, or one that a library raised because of it? A Ctrl-C
+    during an import in C (MuJoCo's, in gym.make) becomes ImportError("initialization
+    failed") inside DependencyNotInstalled; one in a torch write becomes a RuntimeError."""
+    while error is not None and not isinstance(error, KeyboardInterrupt):
+        error = error.__cause__ or error.__context__  # Python keeps this chain free of loops
+    return error is not None
+
+@contextlib.contextmanager
+def ctrl_c_deferred():
+    """Hold a Ctrl-C back while the block runs (a file write that must not stop half way),
+    then deliver it through the handler it was held from: KeyboardInterrupt after the block."""
+    before, pressed = signal.getsignal(signal.SIGINT), []
+    try:
+        signal.signal(signal.SIGINT, lambda signum, frame: pressed.append(signum))
+    except (ValueError, TypeError):  # not the main thread, or a handler set outside Python
+        before = None
+    try:
+        yield
+    finally:
+        if before is not None:
+            signal.signal(signal.SIGINT, before)
+        if pressed:
+            signal.raise_signal(signal.SIGINT)  # the held Ctrl-C, now
 
 @contextlib.contextmanager
 def env_errors(env_id):
@@ -172,6 +217,8 @@ def env_errors(env_id):
     try:
         yield
     except (ImportError, gym.error.DependencyNotInstalled) as e:  # e.g. no MuJoCo
+        if from_ctrl_c(e):  # Ctrl-C while MuJoCo was imported: no package is missing
+            raise KeyboardInterrupt from None
         raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
     except gym.error.Error as e:  # NameNotFound, VersionNotFound, ...
         raise UserError(f"unknown environment {env_id!r}: {e}") from None
@@ -197,6 +244,20 @@ def make_vec_env(env_id, num_envs, seed, solved_return=None):
         obs, _ = envs.reset(seed=seed)
     return envs, obs, solved
 
+def finished_episodes(info, step, episodes, threshold, window=20):
+    """Episode bookkeeping after a step of make_vec_env's envs: `episodes` holds (step, return)
+    of each episode finished so far. Returns those that ended at this `step`, as (step, return)
+    pairs, and whether the run is solved: the last `window` returns, these included, average
+    `threshold` or more. (RecordEpisodeStatistics marks the envs whose episode ended.)
+    >>> info = {"episode": {"r": np.array([9.0, 30.0])}, "_episode": np.array([False, True])}
+    >>> finished_episodes(info, 64, episodes=[(8, 20.0)] * 19, threshold=20)
+    ([(64, 30.0)], True)
+    """
+    ended = ([(step, float(r)) for r in info["episode"]["r"][info["_episode"]]]
+             if "episode" in info else [])
+    last = [r for _, r in (episodes[-window:] + ended)[-window:]]
+    return ended, len(last) == window and bool(np.mean(last) >= threshold)
+
 def parse_config(cls, argv=None, description=None):
     """Build a `cls` (a @dataclass) from flags: `num_envs: int = 8` becomes `--num-envs 8`,
     the string under the field its help; a bool becomes `--name/--no-name`; `x: float | None`
@@ -221,6 +282,9 @@ def parse_config(cls, argv=None, description=None):
         parser.add_argument("--" + f.name.replace("_", "-"), default=f.default, help=help_text,
                             **how)
     args = parser.parse_args(argv)
+    for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
+        if isinstance(value, float) and not np.isfinite(value):
+            parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")
     if getattr(args, "watch", False) and HEADLESS:  # fail now, not after hours of training
         parser.error("--watch opens a window, but this machine has no display (the GIFs in "
                      "the run folder show the agent)")
@@ -243,6 +307,24 @@ def check(condition, message):
     """For Config.__post_init__: raise ValueError(message) unless `condition`."""
     if not condition:
         raise ValueError(message)
+
+RANGES = {"> 0": (lambda v: v > 0, "positive"), ">= 0": (lambda v: v >= 0, ">= 0"),
+          "> 1": (lambda v: v > 1, "> 1"), "(0, 1]": (lambda v: 0 < v <= 1, "in (0, 1]"),
+          "[0, 1]": (lambda v: 0 <= v <= 1, "in [0, 1]")}
+
+def check_ranges(config, **ranges):
+    """For Config.__post_init__: each named field lies in its range (a key of RANGES; "... or
+    none" also lets None through), else ValueError. Checks relating two fields stay explicit.
+    >>> check_ranges(argparse.Namespace(gamma=1.5, lam=None), lam="[0, 1] or none", gamma="(0, 1]")
+    Traceback (most recent call last):
+    ValueError: --gamma must be in (0, 1], got 1.5
+    """
+    for name, allowed in ranges.items():
+        value, optional = getattr(config, name), allowed.endswith(" or none")
+        inside, words = RANGES[allowed.removesuffix(" or none")]
+        if not (value is None and optional or value is not None and inside(value)):
+            raise ValueError(f"--{name.replace('_', '-')} must be {words}"
+                             f"{' or none' if optional else ''}, got {value}")
 
 def make_run_dir(root, script, env_id, seed):
     """Create and return <root>/<script>__<env>__seed<k>__<timestamp>[-i]/."""
@@ -267,16 +349,24 @@ def append_csv(path, row):
         writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
 
 def save_checkpoint(obj, path):
-    """torch.save to a temporary file, flushed to disk, then renamed: never half a file."""
+    """torch.save to a temporary file, flushed to disk, then renamed: never half a file and
+    never a .tmp left, Ctrl-C or not (a Ctrl-C waits until the file is whole)."""
     tmp = Path(f"{path}.tmp")
-    with open(tmp, "wb") as f:
-        torch.save(obj, f)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    with ctrl_c_deferred():
+        try:
+            with open(tmp, "wb") as f:
+                torch.save(obj, f)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
+        except OSError as e:  # e.g. the disk is full
+            raise UserError(f"cannot write {path}: {e.strerror or e}") from None
+        finally:
+            tmp.unlink(missing_ok=True)
 
-def load_checkpoint(path, required=()):
-    """torch.load(weights_only=True), or one clear UserError; a run folder means its model.pt."""
+def load_checkpoint(path, required=(), script=None):
+    """torch.load(weights_only=True), or one clear UserError; a run folder means its model.pt.
+    With `script` (e.g. "ppo_cartpole"), a checkpoint that names another script is refused."""
     path = Path(path) / "model.pt" if Path(path).is_dir() else Path(path)
     if not path.is_file():
         raise UserError(f"no checkpoint at {path}")
@@ -285,6 +375,10 @@ def load_checkpoint(path, required=()):
     except Exception:  # cut short, damaged, not a torch file, or Python objects inside
         raise UserError(f"cannot read {path}: truncated, corrupt or not a checkpoint of these "
                         "scripts") from None
+    if script and isinstance(ckpt, dict) and ckpt.get("script") != script:
+        saved_by = (f"a model of {ckpt['script']}.py" if "script" in ckpt else
+                    "from an older version that did not record its script: train it again")
+        raise UserError(f"{path} is not a model of {script}.py: it is {saved_by}")
     if not isinstance(ckpt, dict) or not set(required) <= set(ckpt):
         raise UserError(f"{path} is not a checkpoint of this script (it lacks {set(required)})")
     return ckpt
@@ -296,5 +390,32 @@ def load_weights(module, state_dict, path):
     except (RuntimeError, ValueError, KeyError) as e:  # shapes, keys or optimizer groups differ
         raise UserError(f"{path} does not fit this script's {type(module).__name__}: "
                         f"{str(e).splitlines()[0]}") from None
+
+def pick_device(cuda):
+    """The GPU if `cuda` and torch sees one; else the CPU, saying so when the GPU was asked for."""
+    if cuda and not torch.cuda.is_available():
+        print("warning: --cuda, but torch sees no GPU here (a CPU-only torch, or no driver): "
+              "running on the CPU", file=sys.stderr, flush=True)
+    return torch.device("cuda" if cuda and torch.cuda.is_available() else "cpu")
+
+def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
+    """nan or inf in `losses` (name -> number), in the weights of `nets` or in their output
+    for `obs`: training diverged, its model is worth nothing. Remove `run_dir` and raise one
+    UserError naming the step and the likely cause."""
+    bad = [name for name, value in losses.items() if not np.isfinite(float(value))]
+    for net in nets:
+        tensors = list(net.parameters())
+        if obs is not None:
+            with torch.no_grad():
+                out = net(torch.as_tensor(obs, dtype=torch.float32, device=tensors[0].device))
+            tensors += list(out) if type(out) is tuple else [out]
+        if not all(bool(t.isfinite().all()) for t in tensors):
+            bad.append(f"{type(net).__name__}'s weights or output")
+    if bad:
+        if run_dir is not None:
+            shutil.rmtree(run_dir, ignore_errors=True)
+        raise UserError(f"training diverged at step {step}: nan or inf in {', '.join(bad)}; likely "
+                        "cause: too high a learning rate (try a smaller --learning-rate)"
+                        + (f"; {run_dir} was removed" if run_dir is not None else ""))
 
 

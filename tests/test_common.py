@@ -207,7 +207,10 @@ def test_parse_config_flags_and_defaults():
 
 @pytest.mark.parametrize("argv,needle", [(["--num-envs", "0"], "--num-envs must be positive"),
                                          (["--num-envs", "two"], "invalid int value"),
-                                         (["--bogus"], "unrecognized arguments")])
+                                         (["--bogus"], "unrecognized arguments"),
+                                         (["--lr", "nan"], "--lr must be a finite number, got nan"),
+                                         (["--lr=-inf"], "--lr must be a finite number, got -inf"),
+                                         (["--target-kl", "inf"], "--target-kl must be a finite")])
 def test_parse_config_rejects_bad_values_with_exit_2(argv, needle, capsys):
     with pytest.raises(SystemExit) as e:
         common.parse_config(Demo, argv)
@@ -321,13 +324,17 @@ def test_env_errors_are_user_errors():
 @pytest.mark.parametrize("body,code,stderr", [
     ("raise common.UserError('something the user can fix')", 2, "error: something the user can fix\n"),
     ("raise KeyboardInterrupt", 130, "\ninterrupted (Ctrl-C)\n"),
+    # torch.save cut short by Ctrl-C; MuJoCo's import cut short by it, as gym.make reports it
+    ("raise RuntimeError('unexpected pos') from KeyboardInterrupt()", 130,
+     "\ninterrupted (Ctrl-C)\n"),
+    ("raise RuntimeError('a bug, no Ctrl-C in it')", 1, None),  # stays a traceback
 ])
 def test_clear_exit_prints_one_line(tmp_path, body, code, stderr):
     program = f"import common\nwith common.clear_exit():\n    {body}\n"
     p = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, cwd=tmp_path,
                        env={"PYTHONPATH": str(__import__("pathlib").Path(common.__file__).parent), "PATH": ""})
     assert p.returncode == code
-    assert p.stderr == stderr
+    assert p.stderr == stderr if stderr else "Traceback" in p.stderr
 
 
 @pytest.mark.parametrize("preset,expected", [({}, ("dummy", "egl")),
@@ -341,6 +348,106 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert p.returncode == 0, p.stderr
     assert tuple(p.stdout.split()) == expected
+
+
+def test_env_errors_knows_a_ctrl_c_from_a_missing_package():
+    """A Ctrl-C while gym.make imports MuJoCo arrives as DependencyNotInstalled, from
+    ImportError("initialization failed"), from the KeyboardInterrupt: it is a Ctrl-C."""
+    import gymnasium as gym
+
+    def cut_short():
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as ctrl_c:
+            try:
+                raise ImportError("initialization failed") from ctrl_c
+            except ImportError as e:
+                raise gym.error.DependencyNotInstalled("MuJoCo is not installed") from e
+
+    with pytest.raises(KeyboardInterrupt):
+        with common.env_errors("Walker2d-v5"):
+            cut_short()
+    with pytest.raises(common.UserError, match="needs a package that is not installed"):
+        with common.env_errors("Walker2d-v5"):
+            raise gym.error.DependencyNotInstalled("MuJoCo is not installed")
+
+
+@pytest.fixture
+def ctrl_c_raises():
+    """SIGINT raises KeyboardInterrupt in this process, as in a terminal (a background job
+    would ignore it)."""
+    import signal
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
+def test_ctrl_c_during_save_checkpoint_waits_for_the_whole_file(tmp_path, monkeypatch,
+                                                                ctrl_c_raises):
+    import signal
+
+    real_save = torch.save
+
+    def save(obj, f):  # Ctrl-C as torch.save starts
+        signal.raise_signal(signal.SIGINT)
+        real_save(obj, f)
+
+    monkeypatch.setattr(common.torch, "save", save)
+    with pytest.raises(KeyboardInterrupt):  # it still arrives, once the file is whole
+        common.save_checkpoint(dict(w=torch.arange(5.0)), tmp_path / "m.pt")
+    monkeypatch.undo()
+    assert torch.equal(common.load_checkpoint(tmp_path / "m.pt")["w"], torch.arange(5.0))
+    assert [p.name for p in tmp_path.iterdir()] == ["m.pt"]
+
+
+def test_save_checkpoint_that_cannot_write_is_a_user_error_and_leaves_no_tmp(tmp_path,
+                                                                             monkeypatch):
+    def full(fd):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(common.os, "fsync", full)
+    with pytest.raises(common.UserError, match="cannot write .*m.pt: No space left on device"):
+        common.save_checkpoint(dict(w=torch.ones(2)), tmp_path / "m.pt")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_load_checkpoint_refuses_another_scripts_model(tmp_path):
+    common.save_checkpoint(dict(script="ppo_cartpole", w=torch.ones(1)), tmp_path / "a.pt")
+    common.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "old.pt")
+    assert common.load_checkpoint(tmp_path / "a.pt", ("w",), script="ppo_cartpole")["w"] == 1
+    with pytest.raises(common.UserError, match="not a model of ppo_kl_cartpole.py: it is a model "
+                                               "of ppo_cartpole.py"):
+        common.load_checkpoint(tmp_path / "a.pt", ("w",), script="ppo_kl_cartpole")
+    with pytest.raises(common.UserError, match="older version .* train it again"):
+        common.load_checkpoint(tmp_path / "old.pt", ("w",), script="ppo_cartpole")
+
+
+def test_stop_if_diverged(tmp_path):
+    net, run = torch.nn.Linear(2, 1), tmp_path / "run"
+    run.mkdir()
+    common.stop_if_diverged(5, dict(loss=0.5, kl=torch.tensor(0.1)), [net], run, obs=[[1., 2.]])
+    assert run.exists()  # all finite: nothing happens
+    with pytest.raises(common.UserError, match=r"at step 7: nan or inf in loss_v; likely cause: "
+                                               r"too high a learning rate .*run was removed"):
+        common.stop_if_diverged(7, dict(loss_pi=0.1, loss_v=float("inf")), [net], run)
+    assert not run.exists()
+    with torch.no_grad():
+        net.weight[0, 0] = 1e38  # finite weights, an output of inf
+    with pytest.raises(common.UserError, match="nan or inf in Linear's weights or output"):
+        common.stop_if_diverged(7, {}, [net], obs=[[10., 0.]])
+    with torch.no_grad():
+        net.bias[0] = float("nan")
+    with pytest.raises(common.UserError, match="nan or inf in Linear's weights or output"):
+        common.stop_if_diverged(7, {}, [net])
+
+
+def test_cuda_without_a_gpu_says_so_in_one_line(monkeypatch, capsys):
+    monkeypatch.setattr(common.torch.cuda, "is_available", lambda: False)
+    assert common.pick_device(True) == torch.device("cpu")
+    assert common.pick_device(False) == torch.device("cpu")
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "torch sees no GPU" in err and "running on the CPU" in err
 
 
 def test_load_weights_mismatch_is_a_user_error():

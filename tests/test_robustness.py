@@ -1,0 +1,229 @@
+"""Ctrl-C anywhere and bad input, for every script: one line, and the exit code the README
+states (130 for Ctrl-C, 2 for bad input), the last good files kept, no *.tmp, no half-made
+run folder. To interrupt at an exact point (an import, the middle of a file write), the child
+interrupts itself there: a sitecustomize.py on its PYTHONPATH patches the module in question
+as it is imported. Nothing here waits on the clock."""
+
+import csv
+import importlib
+import os
+import textwrap
+
+import imageio.v3 as iio
+import pytest
+import torch
+
+from conftest import ROOT, interrupt, run_script
+
+CARTPOLE = ["ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole"]
+QUICK = ["--total-timesteps", 512, "--no-stop-when-solved", "--eval-episodes", 1,
+         "--print-every", 1]
+
+# Shared by every child below: after_import(name, patch) calls patch(module) right after
+# `name` is first imported; the test appends what it patches.
+AFTER_IMPORT = '''
+import importlib.machinery, signal, sys
+
+def after_import(target, patch):
+    class Finder:
+        def find_spec(self, name, path=None, module=None):
+            if name != target:
+                return None
+            sys.meta_path.remove(self)
+            spec = importlib.machinery.PathFinder.find_spec(name, path)
+            run = spec.loader.exec_module
+            def exec_module(module):
+                run(module)
+                patch(module)
+            spec.loader.exec_module = exec_module
+            return spec
+    sys.meta_path.insert(0, Finder())
+'''
+
+
+def hooked(tmp_path, code):
+    """Environment variables that make the child run AFTER_IMPORT + `code` at start-up."""
+    folder = tmp_path / "hook"
+    folder.mkdir()
+    (folder / "sitecustomize.py").write_text(AFTER_IMPORT + textwrap.dedent(code))
+    paths = [str(folder), os.environ.get("PYTHONPATH")]
+    return {"PYTHONPATH": os.pathsep.join(filter(None, paths))}
+
+
+def run_folders(path):
+    return [p for p in path.iterdir() if p.name != "hook"]
+
+
+def one_line(stderr, needle):
+    lines = stderr.strip().splitlines()
+    return "Traceback" not in stderr and len(lines) == 1 and needle in lines[0]
+
+
+# --- Ctrl-C --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("script,module", [(s, "torch") for s in CARTPOLE]
+                         + [("ppo_cartpole", "gymnasium")])
+def test_ctrl_c_while_the_imports_load(script, module, tmp_path):
+    """The first second of a run: torch and gymnasium are being imported."""
+    env = hooked(tmp_path, f'''
+        class CtrlC:  # Ctrl-C as {module} starts to import
+            def find_spec(self, name, path=None, module=None):
+                if name == "{module}":
+                    sys.meta_path.remove(self)
+                    signal.raise_signal(signal.SIGINT)
+        sys.meta_path.insert(0, CtrlC())
+    ''')
+    p = run_script(f"{script}.py", "--run-dir", tmp_path, *QUICK, env=env, timeout=120)
+    assert p.returncode == 130, p.stderr
+    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    assert run_folders(tmp_path) == []
+
+
+def test_ctrl_c_while_mujoco_is_imported_is_no_missing_package(tmp_path):
+    """A Ctrl-C inside MuJoCo's C import comes out of gym.make as DependencyNotInstalled from
+    ImportError("initialization failed") from KeyboardInterrupt: it is a Ctrl-C."""
+    env = hooked(tmp_path, '''
+        class CtrlC:
+            def find_spec(self, name, path=None, module=None):
+                if name == "mujoco":
+                    sys.meta_path.remove(self)
+                    try:
+                        signal.raise_signal(signal.SIGINT)
+                    except KeyboardInterrupt as e:  # what MuJoCo's C import turns it into
+                        raise ImportError("initialization failed") from e
+        sys.meta_path.insert(0, CtrlC())
+    ''')
+    p = run_script("ppo_cartpole.py", "--env-id", "Walker2d-v5", "--run-dir", tmp_path, env=env,
+                   timeout=120)
+    assert p.returncode == 130, p.stderr
+    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    assert run_folders(tmp_path) == []
+
+
+@pytest.mark.parametrize("script", CARTPOLE)
+def test_ctrl_c_in_the_middle_of_writing_model_pt(script, tmp_path):
+    """torch.save cut short raised RuntimeError("... unexpected pos") and left model.pt.tmp:
+    now the write finishes, then the Ctrl-C ends the run."""
+    env = hooked(tmp_path, '''
+        def patch(torch):
+            real_save = torch.save
+            def save(obj, f, *args, **kwargs):
+                class HalfWay:  # Ctrl-C during the third of the file's writes
+                    writes = 0
+                    def write(self, data):
+                        HalfWay.writes += 1
+                        if HalfWay.writes == 3:
+                            signal.raise_signal(signal.SIGINT)
+                        return f.write(data)
+                    def __getattr__(self, name):
+                        return getattr(f, name)
+                torch.save = real_save  # once
+                return real_save(obj, HalfWay(), *args, **kwargs)
+            torch.save = save
+        after_import("torch", patch)
+    ''')
+    p = run_script(f"{script}.py", "--run-dir", tmp_path, "--no-gifs", *QUICK, env=env,
+                   timeout=300)
+    assert p.returncode == 130, p.stderr
+    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    (run,) = run_folders(tmp_path)
+    assert torch.load(run / "model.pt", weights_only=True)["global_step"] == 512
+    assert not list(run.glob("*.tmp*"))
+
+
+def test_ctrl_c_while_a_gif_is_written(tmp_path):
+    """The GIF being written is finished, then the Ctrl-C ends the run."""
+    env = hooked(tmp_path, '''
+        def patch(v2):
+            real = v2.mimsave
+            def mimsave(path, *args, **kwargs):
+                if str(path).endswith("after.gif.tmp"):
+                    signal.raise_signal(signal.SIGINT)
+                return real(path, *args, **kwargs)
+            v2.mimsave = mimsave
+        after_import("imageio.v2", patch)
+    ''')
+    p = run_script("ppo_cartpole.py", "--run-dir", tmp_path, *QUICK, env=env, timeout=300)
+    assert p.returncode == 130, p.stderr
+    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    (run,) = run_folders(tmp_path)
+    assert len(iio.imread(run / "after.gif", index=None)) > 1  # whole, every frame
+    assert not list(run.glob("*.tmp*"))
+
+
+@pytest.mark.parametrize("script", CARTPOLE)
+def test_interrupted_run_draws_its_curve_and_says_where_it_is(script, tmp_path):
+    code, out, err = interrupt(f"{script}.py", "--run-dir", tmp_path, "--no-stop-when-solved",
+                               "--total-timesteps", 10_000_000, "--print-every", 1, after="step")
+    assert code == 130, err
+    assert "Traceback" not in err
+    (run,) = tmp_path.iterdir()
+    assert (run / "curve.png").stat().st_size > 0 and not list(run.glob("*.tmp*"))
+    last = out.strip().splitlines()[-1]
+    assert last.startswith("interrupted at step") and str(run) in last, out
+    assert all(name in last for name in ("model.pt", "progress.csv", "curve.png", "--eval"))
+
+
+# --- bad input -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("script,args,needle", [
+    *[(s, ["--learning-rate", "inf"], "--learning-rate must be a finite number") for s in CARTPOLE],
+    ("ppo_cartpole", ["--learning-rate", "nan"], "--learning-rate must be a finite number"),
+    ("ppo_kl_cartpole", ["--solved-return", "nan"], "--solved-return must be a finite number"),
+    ("actor_critic_cartpole", ["--gamma=-inf"], "--gamma must be a finite number"),
+    ("ddpg_walker", ["--gamma", "nan"], "--gamma must be a finite number"),
+    ("ddpg_walker", ["--eval", "a.pt", "--resume", "b"], "--resume"),
+])
+def test_bad_flags_are_one_line_and_exit_2(script, args, needle, tmp_path):
+    p = run_script(f"{script}.py", *args, "--run-dir", tmp_path, timeout=120)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert one_line(p.stderr, needle), p.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("script,args,needle", [
+    *[(s, ["--learning-rate", "1e30"], "training diverged at step") for s in CARTPOLE],
+    ("ppo_cartpole", ["--reward-scale", "1e30"], "nan or inf in loss_v"),
+])
+def test_a_run_that_diverges_stops_in_one_line_without_a_run_folder(script, args, needle,
+                                                                    tmp_path):
+    p = run_script(f"{script}.py", *args, "--run-dir", tmp_path, *QUICK, timeout=300)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert one_line(p.stderr, needle) and "learning rate" in p.stderr, p.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def models(tmp_path_factory):
+    """A model.pt of each CartPole script, from a tiny run."""
+    out = {}
+    for name in CARTPOLE:
+        module = importlib.import_module(name)
+        cfg = module.Config(run_dir=str(tmp_path_factory.mktemp(name)), total_timesteps=512,
+                            stop_when_solved=False, gifs=False, curves=False, eval_episodes=1,
+                            print_every=10**6)
+        out[name] = module.train(cfg)["run_dir"] / "model.pt"
+    return out
+
+
+@pytest.mark.parametrize("script,other", [("ppo_kl_cartpole", "ppo_cartpole"),
+                                          ("actor_critic_cartpole", "ppo_kl_cartpole"),
+                                          ("ppo_cartpole", "actor_critic_cartpole")])
+def test_eval_refuses_another_scripts_model(script, other, models):
+    p = run_script(f"{script}.py", "--eval", models[other], timeout=120)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert one_line(p.stderr, f"is not a model of {script}.py: it is a model of {other}.py")
+    ok = run_script(f"{other}.py", "--eval", models[other], "--eval-episodes", 1, timeout=120)
+    assert ok.returncode == 0, ok.stderr
+
+
+@pytest.mark.parametrize("script", CARTPOLE)
+def test_cuda_without_a_gpu_says_so_and_trains_on_the_cpu(script, tmp_path):
+    p = run_script(f"{script}.py", "--cuda", "--run-dir", tmp_path, "--no-gifs", "--no-curves",
+                   *QUICK, env={"CUDA_VISIBLE_DEVICES": ""}, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert one_line(p.stderr, "warning: --cuda, but torch sees no GPU"), p.stderr
+    assert "running on the CPU" in p.stderr
+    (run,) = tmp_path.iterdir()
+    with open(run / "progress.csv") as f:
+        assert len(list(csv.DictReader(f))) >= 1  # it trained
