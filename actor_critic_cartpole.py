@@ -36,7 +36,6 @@ import common  # first: it turns a Ctrl-C while torch loads into one line (see i
 import copy
 import dataclasses
 import time
-from collections import deque
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -45,6 +44,43 @@ import torch.nn as nn
 from torch.distributions import Categorical
 
 import plots
+
+
+# =============================================================================
+# Networks
+# =============================================================================
+
+
+def layer_init(layer, gain=np.sqrt(2)):
+    """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
+    nn.init.orthogonal_(layer.weight, gain)
+    nn.init.zeros_(layer.bias)
+    return layer
+
+
+class ActorCritic(nn.Module):
+    """Tutorial 004's model: one shared hidden layer, `common`, feeding two heads.
+
+        obs -> common (Linear + ReLU) -> actor:  logits of pi(a|s)  (tutorial: `action`, softmax)
+                                      -> critic: V(s)
+    """
+
+    def __init__(self, obs_dim, n_actions, hidden):
+        super().__init__()
+        self.common = layer_init(nn.Linear(obs_dim, hidden))
+        # A small actor head makes the first policy close to uniform.
+        self.actor = layer_init(nn.Linear(hidden, n_actions), gain=0.01)
+        self.critic = layer_init(nn.Linear(hidden, 1), gain=1.0)
+
+    def forward(self, obs):
+        h = torch.relu(self.common(obs))
+        # (B, n_actions), (B,): a stray (B, 1) value would broadcast against targets
+        return self.actor(h), self.critic(h).squeeze(-1)
+
+
+# =============================================================================
+# Hyperparameters: every one once, here; --help prints the string under each
+# =============================================================================
 
 
 @dataclass
@@ -129,56 +165,15 @@ class Config:
 
     def __post_init__(self):
         common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
-        for name in ("total_timesteps", "num_envs", "num_steps", "hidden", "print_every",
-                     "eval_episodes", "threads", "learning_rate"):
-            common.check(getattr(self, name) > 0,
-                         f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
-        for name in ("ent_coef", "vf_coef", "max_grad_norm"):
-            common.check(getattr(self, name) >= 0,
-                         f"--{name.replace('_', '-')} must be >= 0, got {getattr(self, name)}")
-        common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
-        common.check(self.lam is None or 0 <= self.lam <= 1,
-                     f"--lam must be in [0, 1] or none, got {self.lam}")
-        common.check(self.reward_scale is None or self.reward_scale > 0,
-                     f"--reward-scale must be positive or none, got {self.reward_scale}")
-        common.check(0 < self.running_reward_alpha <= 1,
-                     f"--running-reward-alpha must be in (0, 1], got {self.running_reward_alpha}")
+        common.check_ranges(
+            self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", hidden="> 0",
+            print_every="> 0", eval_episodes="> 0", threads="> 0", learning_rate="> 0",
+            ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0", gamma="(0, 1]",
+            lam="[0, 1] or none", reward_scale="> 0 or none", running_reward_alpha="(0, 1]")
         batch = self.num_envs * self.num_steps
         common.check(self.total_timesteps >= batch,
                      f"--total-timesteps ({self.total_timesteps}) is less than one rollout "
                      f"(num_envs x num_steps = {batch}): nothing would be learned")
-
-
-# =============================================================================
-# Networks
-# =============================================================================
-
-
-def layer_init(layer, gain=np.sqrt(2)):
-    """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
-    nn.init.orthogonal_(layer.weight, gain)
-    nn.init.zeros_(layer.bias)
-    return layer
-
-
-class ActorCritic(nn.Module):
-    """Tutorial 004's model: one shared hidden layer, `common`, feeding two heads.
-
-        obs -> common (Linear + ReLU) -> actor:  logits of pi(a|s)  (tutorial: `action`, softmax)
-                                      -> critic: V(s)
-    """
-
-    def __init__(self, obs_dim, n_actions, hidden):
-        super().__init__()
-        self.common = layer_init(nn.Linear(obs_dim, hidden))
-        # A small actor head makes the first policy close to uniform.
-        self.actor = layer_init(nn.Linear(hidden, n_actions), gain=0.01)
-        self.critic = layer_init(nn.Linear(hidden, 1), gain=1.0)
-
-    def forward(self, obs):
-        h = torch.relu(self.common(obs))
-        # (B, n_actions), (B,): a stray (B, 1) value would broadcast against targets
-        return self.actor(h), self.critic(h).squeeze(-1)
 
 
 # =============================================================================
@@ -221,19 +216,24 @@ def a2c_targets(model, rollout, next_obs, cfg):
         next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
         if cfg.lam is None:
             # R_t = r_t + gamma r_{t+1} + ... + gamma^k V(s_{t+k}): the n-step return up to
-            # the rollout's end (Mnih et al. 2016, Algorithm S3); A_t = R_t - V(s_t).
+            # the rollout's end (Mnih et al. 2016, Algorithm S3), computed from t = T-1 down as
+            # R_t = r_t + gamma * (1 - terminated_t) * (V(s_{t+1}) if truncated_t or t = T-1
+            # else R_{t+1}); A_t = R_t - V(s_t), which is GAE below with lam = 1.
             returns = common.discounted_returns(rollout["rewards"], next_values,
                                                 rollout["terminated"], rollout["truncated"],
                                                 cfg.gamma)
             return returns, returns - values
-        # GAE(lambda) advantages (Schulman et al. 2016, eq. 16); the targets are A + V.
+        # TD error  delta_t = r_t + gamma * V(s_{t+1}) * (1 - terminated_t) - V(s_t)
+        # GAE       A_t = delta_t + gamma * lam * (1 - done_t) * A_{t+1}, from t = T-1 down
+        #           (Schulman et al. 2016, eq. 16; done = terminated or truncated); R_t = A_t + V
         advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
                                 rollout["truncated"], cfg.gamma, cfg.lam)
         return advantages + values, advantages
 
 
-def a2c_loss(model, obs, act, adv, ret, cfg):
-    """The A2C loss on one batch. Returns (loss, stats for the log)."""
+def a2c_loss(model, data, cfg):
+    """The A2C loss on one batch `data` (obs, act, adv, ret). Returns (loss, stats for the log)."""
+    obs, act, adv, ret = data["obs"], data["act"], data["adv"], data["ret"]
     logits, values = model(obs)
     dist = Categorical(logits=logits)  # pi(.|s)
     # Policy gradient: grad log pi(a_t|s_t) * A_t, ascended (Mnih et al. 2016, Algorithm S3);
@@ -308,22 +308,48 @@ def train(cfg: Config):
     default_scale = 1 - cfg.gamma if cfg.gamma < 1 else 1.0
     reward_scale = cfg.reward_scale if cfg.reward_scale is not None else default_scale
 
-    # --- episode bookkeeping ---
-    episode_returns, episode_steps = [], []  # every finished training episode, in order
-    last20 = deque(maxlen=20)
-    running_reward = 0.0  # tutorial 004's smoothed episode return
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset
     # step: its action is ignored, its reward is 0 and the obs it returns is
     # the first of the new episode. `autoreset` marks envs whose next step is one.
     autoreset = np.zeros(N, dtype=bool)
+
+    # --- episode bookkeeping, the stop and the log: plumbing, out of the loop's way ---
+    episodes = []  # (env step, return) of every finished training episode, in order
+    running_reward, alpha = 0.0, cfg.running_reward_alpha  # tutorial 004's smoothed return
     global_step, solved_step, update, interrupted, stats = 0, None, 0, False, {}
     checked, stopped = 0, False  # the last update at which pi was checked; whether it held
 
-    def log(stats):  # one progress.csv row: the state of training now
+    def mean20():  # the mean return of the last 20 finished episodes
+        return float(np.mean([r for _, r in episodes[-20:]])) if episodes else float("nan")
+
+    def log(stats, line=False):  # one progress.csv row: the state of training now
         common.append_csv(run_dir / "progress.csv", dict(
-            global_step=global_step, episodes=len(episode_returns),
-            return_mean20=float(np.mean(last20)) if last20 else float("nan"),
+            global_step=global_step, episodes=len(episodes), return_mean20=mean20(),
             running_reward=running_reward, lr=optimizer.param_groups[0]["lr"], **stats))
+        if line:  # and the progress line
+            elapsed = time.time() - start_time
+            print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  "
+                  f"return(20) {mean20():6.1f}  running reward {running_reward:6.1f}  "
+                  f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:.2e}  "
+                  f"entropy {stats['entropy']:.3f}  {elapsed:.1f}s", flush=True)
+
+    def stop_now(update):
+        """Solved: say so the first time. Stop if pi as it is now holds too: the last 20
+        episodes were played by the policies of several updates, and the latest update can
+        have undone what they show. Checked at most once per update."""
+        nonlocal solved_step, checked
+        if solved_step is None:
+            solved_step = global_step
+            print(f"solved: mean return of the last 20 episodes {mean20():.1f} >= {threshold:g} "
+                  f"at step {global_step} (episode {len(episodes)}) after "
+                  f"{time.time() - start_time:.1f}s", flush=True)
+        if not cfg.stop_when_solved or checked == update:
+            return False
+        checked = update
+        if not holds(model, device, cfg, threshold, global_step):
+            return False
+        log(dict.fromkeys(stats, float("nan")))  # the last row: where training ended
+        return True
 
     try:
         for update in range(1, num_updates + 1):
@@ -344,62 +370,37 @@ def train(cfg: Config):
                 buffer.store(t, obs, action, reward_scale * reward, terminated, truncated,
                              valid=~autoreset)
                 autoreset = terminated | truncated
-                if "episode" in info:  # episodes that ended at this step (RecordEpisodeStatistics)
-                    for ep_return in info["episode"]["r"][info["_episode"]]:
-                        episode_returns.append(float(ep_return))
-                        episode_steps.append(global_step)
-                        last20.append(float(ep_return))
-                        running_reward = (cfg.running_reward_alpha * float(ep_return)
-                                          + (1 - cfg.running_reward_alpha) * running_reward)
-                solved_now = len(last20) == 20 and np.mean(last20) >= threshold
-                if solved_now and solved_step is None:
-                    solved_step = global_step
-                    print(f"solved: mean return of the last 20 episodes {np.mean(last20):.1f} >= "
-                          f"{threshold:g} at step {global_step} (episode {len(episode_returns)}) "
-                          f"after {time.time() - start_time:.1f}s", flush=True)
-                # Stop once solved, if pi as it is now holds too: the last 20 episodes were played
-                # by the policies of several updates, and the latest update can have undone what
-                # they show. Checked at most once per update.
-                if solved_now and cfg.stop_when_solved and checked != update:
-                    checked = update
-                    stopped = holds(model, device, cfg, threshold, global_step)
-                    if stopped:
-                        break
-            if stopped:
-                # The last row shows where training ended; the partial rollout trains nothing.
-                log(dict.fromkeys(stats, float("nan")))
+                ended, solved = common.finished_episodes(info, global_step, episodes, threshold)
+                episodes += ended
+                for _, ep_return in ended:  # tutorial 004's running reward
+                    running_reward = alpha * ep_return + (1 - alpha) * running_reward
+                stopped = solved and stop_now(update)
+                if stopped:
+                    break
+            if stopped:  # solved, and pi held: the partial rollout trains nothing
                 break
 
             # --- V of the whole rollout in one batch, then returns and advantages ---
             rollout = buffer.get_batch(device)  # (T, N, ...) tensors
             returns, advantages = a2c_targets(model, rollout, next_obs, cfg)  # (T, N) each
 
-            # --- update: flatten (T, N) to a batch, dropping the autoreset steps ---
+            # --- update: flatten (T, N) to one batch `data`, dropping the autoreset steps ---
             keep = rollout["valid"].reshape(-1)
-            b_obs = rollout["obs"].reshape(T * N, obs_dim)[keep]
-            b_act = rollout["actions"].reshape(-1)[keep]
-            b_adv, b_ret = advantages.reshape(-1)[keep], returns.reshape(-1)[keep]
-            if cfg.norm_adv:
-                b_adv = (b_adv - b_adv.mean()) / (b_adv.std(unbiased=False) + 1e-8)
+            data = {key: x.flatten(0, 1)[keep] for key, x in dict(
+                obs=rollout["obs"], act=rollout["actions"], adv=advantages, ret=returns).items()}
+            if cfg.norm_adv:  # A to mean 0, std 1 over the batch
+                adv = data["adv"]
+                data["adv"] = (adv - adv.mean()) / (adv.std(unbiased=False) + 1e-8)
             # One gradient step on the whole batch: A2C uses each transition once.
-            loss, stats = a2c_loss(model, b_obs, b_act, b_adv, b_ret, cfg)
+            loss, stats = a2c_loss(model, data, cfg)
             optimizer.zero_grad()
             loss.backward()
             if cfg.max_grad_norm > 0:
                 nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm)
             optimizer.step()
-            # nan or inf in the losses, the weights or their output: one line, no run folder
+            # --- nan or inf in the losses, weights or outputs: one line, no run folder; log ---
             common.stop_if_diverged(global_step, stats, (model,), run_dir, obs=next_obs)
-
-            # --- logging ---
-            log(stats)
-            if update % cfg.print_every == 0 or update == 1:
-                elapsed = time.time() - start_time
-                print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  "
-                      f"return(20) {np.mean(last20) if last20 else float('nan'):6.1f}  "
-                      f"running reward {running_reward:6.1f}  "
-                      f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:.2e}  "
-                      f"entropy {stats['entropy']:.3f}  {elapsed:.1f}s", flush=True)
+            log(stats, line=update % cfg.print_every == 0 or update == 1)
     except KeyboardInterrupt:
         interrupted = True
     except (ValueError, RuntimeError):  # e.g. Categorical refusing nan logits: diverged?
@@ -409,7 +410,7 @@ def train(cfg: Config):
     finally:
         envs.close()
         if run_dir.exists():  # common.stop_if_diverged removes a diverged run's folder
-            for step, ep_return in zip(episode_steps, episode_returns):
+            for step, ep_return in episodes:
                 common.append_csv(run_dir / "episodes.csv",
                                   {"global_step": step, "return": ep_return})
             common.save_checkpoint(dict(script="actor_critic_cartpole", model=model.state_dict(),
@@ -417,8 +418,8 @@ def train(cfg: Config):
                                         global_step=global_step), run_dir / "model.pt")
 
     result = dict(run_dir=run_dir, solved=solved_step is not None, solved_step=solved_step,
-                  global_step=global_step, episode_returns=episode_returns, eval_returns=[],
-                  greedy_returns=[], interrupted=interrupted)
+                  global_step=global_step, episode_returns=[r for _, r in episodes],
+                  eval_returns=[], greedy_returns=[], interrupted=interrupted)
     if interrupted:  # the curve so far and where everything is; main() exits with 130
         if cfg.curves and (run_dir / "progress.csv").exists():
             with common.ctrl_c_deferred():  # a second Ctrl-C waits for the picture
@@ -428,7 +429,7 @@ def train(cfg: Config):
               f"(replay: python actor_critic_cartpole.py --eval {run_dir})", flush=True)
         return result
     elapsed = time.time() - start_time
-    print(f"trained {global_step} steps, {len(episode_returns)} episodes in {elapsed:.1f}s; "
+    print(f"trained {global_step} steps, {len(episodes)} episodes in {elapsed:.1f}s; "
           f"model: {run_dir / 'model.pt'}", flush=True)
 
     # --- after training: the learning curve, evaluation and GIFs ---

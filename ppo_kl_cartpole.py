@@ -36,7 +36,6 @@ import common  # first: it turns a Ctrl-C while torch loads into one line (see i
 import copy
 import dataclasses
 import time
-from collections import deque
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -45,6 +44,54 @@ import torch.nn as nn
 from torch.distributions import Categorical, kl_divergence
 
 import plots
+
+
+# =============================================================================
+# Networks
+# =============================================================================
+
+
+def layer_init(layer, gain=np.sqrt(2)):
+    """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
+    nn.init.orthogonal_(layer.weight, gain)
+    nn.init.zeros_(layer.bias)
+    return layer
+
+
+class PolicyNetwork(nn.Module):
+    """pi(a|s): observation -> logits of a categorical distribution over actions."""
+
+    def __init__(self, obs_dim, n_actions, hidden):
+        super().__init__()
+        self.net = nn.Sequential(
+            layer_init(nn.Linear(obs_dim, hidden)), nn.Tanh(),
+            layer_init(nn.Linear(hidden, hidden)), nn.Tanh(),
+            # A small last layer makes the first policy close to uniform.
+            layer_init(nn.Linear(hidden, n_actions), gain=0.01),
+        )
+
+    def forward(self, obs):
+        return self.net(obs)  # logits, (B, n_actions); pi(.|s) = softmax(logits)
+
+
+class ValueNetwork(nn.Module):
+    """V(s): observation -> expected discounted return from s."""
+
+    def __init__(self, obs_dim, hidden):
+        super().__init__()
+        self.net = nn.Sequential(
+            layer_init(nn.Linear(obs_dim, hidden)), nn.Tanh(),
+            layer_init(nn.Linear(hidden, hidden)), nn.Tanh(),
+            layer_init(nn.Linear(hidden, 1), gain=1.0),
+        )
+
+    def forward(self, obs):
+        return self.net(obs).squeeze(-1)  # (B,): a stray (B, 1) would broadcast against targets
+
+
+# =============================================================================
+# Hyperparameters: every one once, here; --help prints the string under each
+# =============================================================================
 
 
 @dataclass
@@ -140,67 +187,18 @@ class Config:
 
     def __post_init__(self):
         common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
-        for name in ("total_timesteps", "num_envs", "num_steps", "update_epochs", "num_minibatches",
-                     "hidden", "print_every", "eval_episodes", "threads", "learning_rate",
-                     "reward_scale", "d_targ", "beta_init"):
-            common.check(getattr(self, name) > 0,
-                         f"--{name.replace('_', '-')} must be positive, got {getattr(self, name)}")
-        for name in ("ent_coef", "vf_coef", "max_grad_norm"):
-            common.check(getattr(self, name) >= 0,
-                         f"--{name.replace('_', '-')} must be >= 0, got {getattr(self, name)}")
-        common.check(0 < self.gamma <= 1, f"--gamma must be in (0, 1], got {self.gamma}")
-        common.check(0 <= self.lam <= 1, f"--lam must be in [0, 1], got {self.lam}")
-        common.check(self.kl_tolerance > 1, f"--kl-tolerance must be > 1, got {self.kl_tolerance}")
-        common.check(self.beta_factor > 1, f"--beta-factor must be > 1, got {self.beta_factor}")
+        common.check_ranges(
+            self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", update_epochs="> 0",
+            num_minibatches="> 0", hidden="> 0", print_every="> 0", eval_episodes="> 0",
+            threads="> 0", learning_rate="> 0", reward_scale="> 0", d_targ="> 0",
+            beta_init="> 0", ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0",
+            gamma="(0, 1]", lam="[0, 1]", kl_tolerance="> 1", beta_factor="> 1")
         batch = self.num_envs * self.num_steps
         common.check(self.num_minibatches <= batch,
                      f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({batch})")
         common.check(self.total_timesteps >= batch,
                      f"--total-timesteps ({self.total_timesteps}) is less than one rollout "
                      f"(num_envs x num_steps = {batch}): nothing would be learned")
-
-
-# =============================================================================
-# Networks
-# =============================================================================
-
-
-def layer_init(layer, gain=np.sqrt(2)):
-    """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
-    nn.init.orthogonal_(layer.weight, gain)
-    nn.init.zeros_(layer.bias)
-    return layer
-
-
-class PolicyNetwork(nn.Module):
-    """pi(a|s): observation -> logits of a categorical distribution over actions."""
-
-    def __init__(self, obs_dim, n_actions, hidden):
-        super().__init__()
-        self.net = nn.Sequential(
-            layer_init(nn.Linear(obs_dim, hidden)), nn.Tanh(),
-            layer_init(nn.Linear(hidden, hidden)), nn.Tanh(),
-            # A small last layer makes the first policy close to uniform.
-            layer_init(nn.Linear(hidden, n_actions), gain=0.01),
-        )
-
-    def forward(self, obs):
-        return self.net(obs)  # logits, (B, n_actions); pi(.|s) = softmax(logits)
-
-
-class ValueNetwork(nn.Module):
-    """V(s): observation -> expected discounted return from s."""
-
-    def __init__(self, obs_dim, hidden):
-        super().__init__()
-        self.net = nn.Sequential(
-            layer_init(nn.Linear(obs_dim, hidden)), nn.Tanh(),
-            layer_init(nn.Linear(hidden, hidden)), nn.Tanh(),
-            layer_init(nn.Linear(hidden, 1), gain=1.0),
-        )
-
-    def forward(self, obs):
-        return self.net(obs).squeeze(-1)  # (B,): a stray (B, 1) would broadcast against targets
 
 
 # =============================================================================
@@ -232,13 +230,14 @@ class RolloutBuffer:
         return {name: torch.as_tensor(array, device=device) for name, array in vars(self).items()}
 
 
-def compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta):
-    """KL-penalized surrogate loss. Returns (loss_pi, entropy of pi, info with kl)."""
+def compute_loss_pi(policy, data, beta):
+    """KL-penalized surrogate loss on a batch `data`: (loss_pi, entropy of pi, info with kl)."""
+    obs, act, adv, logp_old = data["obs"], data["act"], data["adv"], data["logp"]
     dist = Categorical(logits=policy(obs))  # pi(.|s)
     logp = dist.log_prob(act)  # log pi(a|s) of the taken actions, (B,)
     ratio = torch.exp(logp - logp_old)  # r_t = pi(a|s) / pi_old(a|s)
     # KL(pi_old(.|s) || pi(.|s)), exact: with few discrete actions no sample estimate is needed.
-    kl = kl_divergence(Categorical(logits=logits_old), dist).mean()
+    kl = kl_divergence(Categorical(logits=data["logits_old"]), dist).mean()
     # L_KLPEN = E[r*A - beta * KL(pi_old(.|s), pi(.|s))]  (Schulman et al. 2017, eq. 8)
     loss_pi = -(ratio * adv).mean() + beta * kl
     return loss_pi, dist.entropy().mean(), dict(kl=kl.detach())
@@ -257,31 +256,31 @@ def adapt_beta(beta, d, cfg):
     return beta
 
 
-def compute_loss_v(value_net, obs, ret):
+def compute_loss_v(value_net, data):
     """L_VF = E[(V(s_t) - R_t)^2]  (Schulman et al. 2017, eq. 9), halved as is usual."""
+    obs, ret = data["obs"], data["ret"]
     return 0.5 * ((value_net(obs) - ret) ** 2).mean()
 
 
-def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_logits_old, b_adv, b_ret,
-               beta, cfg):
-    """update_epochs passes of shuffled minibatches over one batch.
+def ppo_update(policy, value_net, optimizer, data, beta, cfg):
+    """update_epochs passes of shuffled minibatches over one batch, `data`: tutorial 002's
+    dict of obs, act, logp (log pi_old(a|s)), adv and ret, each with one row per transition.
     Returns the update's stats for the log, averaged over its minibatch steps, and d,
     the mean KL(pi_old || pi) over the batch after the update (for the beta rule).
-    b_logits_old is pi_old in full, (B, n_actions), for the exact KL."""
+    data["logits_old"] is pi_old in full, (B, n_actions), for the exact KL."""
     params = [*policy.parameters(), *value_net.parameters()]
     stats = []
     for epoch in range(cfg.update_epochs):
         # num_minibatches random minibatches that together hold every transition once.
-        for mb in torch.randperm(len(b_obs), device=b_obs.device).tensor_split(cfg.num_minibatches):
-            mb_obs, mb_adv = b_obs[mb], b_adv[mb]
+        order = torch.randperm(len(data["obs"]), device=data["obs"].device)
+        for mb_inds in order.tensor_split(cfg.num_minibatches):
+            mb = {key: x[mb_inds] for key, x in data.items()}
             if cfg.norm_adv:
-                mb_adv = (mb_adv - mb_adv.mean()) / (mb_adv.std(unbiased=False) + 1e-8)
-            loss_pi, entropy, info = compute_loss_pi(policy, mb_obs, b_act[mb], mb_adv, b_logp[mb],
-                                                     b_logits_old[mb], beta)
-            loss_v = compute_loss_v(value_net, mb_obs, b_ret[mb])
-            # L = L_KLPEN - c1 * L_VF + c2 * S[pi], maximized  (Schulman et al. 2017, eq. 9,
-            # with L_KLPEN for L_CLIP). The networks are separate, so c1 only matters through
-            # the shared gradient clip.
+                mb["adv"] = (mb["adv"] - mb["adv"].mean()) / (mb["adv"].std(unbiased=False) + 1e-8)
+            loss_pi, entropy, info = compute_loss_pi(policy, mb, beta)
+            loss_v = compute_loss_v(value_net, mb)
+            # L = L_KLPEN - c1 * L_VF + c2 * S[pi], maximized  (Schulman et al. 2017, eq. 9, KLPEN).
+            # The networks are separate, so c1 only matters through the shared gradient clip.
             loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
 
             optimizer.zero_grad()
@@ -293,7 +292,8 @@ def ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_logits_old,
                                       info["kl"]]))
     means = torch.stack(stats).mean(0).tolist()
     with torch.no_grad():  # d: how far this whole update moved pi, on the whole batch
-        d = kl_divergence(Categorical(logits=b_logits_old), Categorical(logits=policy(b_obs)))
+        d = kl_divergence(Categorical(logits=data["logits_old"]),
+                          Categorical(logits=policy(data["obs"])))
     return dict(zip(("loss_pi", "loss_v", "entropy", "kl_minibatch"), means), kl=d.mean().item())
 
 
@@ -358,22 +358,49 @@ def train(cfg: Config):
                                  lr=cfg.learning_rate, eps=1e-5)
     num_updates = cfg.total_timesteps // (T * N)
 
-    # --- episode bookkeeping ---
-    episode_returns, episode_steps = [], []  # every finished training episode, in order
-    last20 = deque(maxlen=20)
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset
     # step: its action is ignored, its reward is 0 and the obs it returns is
     # the first of the new episode. `autoreset` marks envs whose next step is one.
     autoreset = np.zeros(N, dtype=bool)
+
+    # --- episode bookkeeping, the stop and the log: plumbing, out of the loop's way ---
+    episodes = []  # (env step, return) of every finished training episode, in order
     global_step, solved_step, update, interrupted, stats = 0, None, 0, False, {}
     checked, stopped = 0, False  # the last update at which pi was checked; whether it held
     beta = cfg.beta_init
 
-    def log(stats):  # one progress.csv row: the state of training now
+    def mean20():  # the mean return of the last 20 finished episodes
+        return float(np.mean([r for _, r in episodes[-20:]])) if episodes else float("nan")
+
+    def log(stats, line=False):  # one progress.csv row: the state of training now
         common.append_csv(run_dir / "progress.csv", dict(
-            global_step=global_step, episodes=len(episode_returns),
-            return_mean20=float(np.mean(last20)) if last20 else float("nan"),
+            global_step=global_step, episodes=len(episodes), return_mean20=mean20(),
             lr=optimizer.param_groups[0]["lr"], **stats))
+        if line:  # and the progress line
+            elapsed = time.time() - start_time
+            print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  "
+                  f"return(20) {mean20():6.1f}  "
+                  f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:.2e}  "
+                  f"kl {stats['kl']:.4f}  beta {stats['beta']:.3g}  "
+                  f"entropy {stats['entropy']:.3f}  {elapsed:.1f}s", flush=True)
+
+    def stop_now(update):
+        """Solved: say so the first time. Stop if pi as it is now holds too: the last 20
+        episodes were played by the policies of several updates, and the latest update can
+        have undone what they show. Checked at most once per update."""
+        nonlocal solved_step, checked
+        if solved_step is None:
+            solved_step = global_step
+            print(f"solved: mean return of the last 20 episodes {mean20():.1f} >= {threshold:g} "
+                  f"at step {global_step} (episode {len(episodes)}) after "
+                  f"{time.time() - start_time:.1f}s", flush=True)
+        if not cfg.stop_when_solved or checked == update:
+            return False
+        checked = update
+        if not holds(policy, device, cfg, threshold, global_step):
+            return False
+        log(dict.fromkeys(stats, float("nan")))  # the last row: where training ended
+        return True
 
     try:
         for update in range(1, num_updates + 1):
@@ -394,28 +421,12 @@ def train(cfg: Config):
                 buffer.store(t, obs, action, cfg.reward_scale * reward, terminated, truncated,
                              valid=~autoreset)
                 autoreset = terminated | truncated
-                if "episode" in info:  # episodes that ended at this step (RecordEpisodeStatistics)
-                    for ep_return in info["episode"]["r"][info["_episode"]]:
-                        episode_returns.append(float(ep_return))
-                        episode_steps.append(global_step)
-                        last20.append(float(ep_return))
-                solved_now = len(last20) == 20 and np.mean(last20) >= threshold
-                if solved_now and solved_step is None:
-                    solved_step = global_step
-                    print(f"solved: mean return of the last 20 episodes {np.mean(last20):.1f} >= "
-                          f"{threshold:g} at step {global_step} (episode {len(episode_returns)}) "
-                          f"after {time.time() - start_time:.1f}s", flush=True)
-                # Stop once solved, if pi as it is now holds too: the last 20 episodes were played
-                # by the policies of several updates, and the latest update can have undone what
-                # they show. Checked at most once per update.
-                if solved_now and cfg.stop_when_solved and checked != update:
-                    checked = update
-                    stopped = holds(policy, device, cfg, threshold, global_step)
-                    if stopped:
-                        break
-            if stopped:
-                # The last row shows where training ended; the partial rollout trains nothing.
-                log(dict.fromkeys(stats, float("nan")))
+                ended, solved = common.finished_episodes(info, global_step, episodes, threshold)
+                episodes += ended
+                stopped = solved and stop_now(update)
+                if stopped:
+                    break
+            if stopped:  # solved, and pi held: the partial rollout trains nothing
                 break
 
             # --- pi_old and V of the whole rollout in one batch, then advantages ---
@@ -431,33 +442,25 @@ def train(cfg: Config):
                 last_obs = torch.as_tensor(next_obs, dtype=torch.float32, device=device)
                 last_value = value_net(last_obs)  # (N,)
                 next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
+                # TD error  delta_t = r_t + gamma * V(s_{t+1}) * (1 - terminated_t) - V(s_t)
+                # GAE       A_t = delta_t + gamma * lam * (1 - done_t) * A_{t+1}, from t = T-1 down
+                #           (Schulman et al. 2016, eq. 16; done = terminated or truncated)
                 advantages = common.gae(rollout["rewards"], values, next_values,
                                         rollout["terminated"], rollout["truncated"],
                                         cfg.gamma, cfg.lam)  # (T, N)
                 returns = advantages + values  # value targets R_t = A_t + V(s_t), detached
 
-            # --- update: flatten (T, N) to a batch, dropping the autoreset steps ---
+            # --- update: flatten (T, N) to one batch `data`, dropping the autoreset steps ---
             keep = rollout["valid"].reshape(-1)
-            b_obs = rollout["obs"].reshape(T * N, obs_dim)[keep]
-            b_act, b_logp = rollout["actions"].reshape(-1)[keep], logp_old.reshape(-1)[keep]
-            b_adv, b_ret = advantages.reshape(-1)[keep], returns.reshape(-1)[keep]
-            b_logits_old = dist_old.logits.reshape(T * N, n_actions)[keep]  # pi_old in full
-            stats = ppo_update(policy, value_net, optimizer, b_obs, b_act, b_logp, b_logits_old,
-                               b_adv, b_ret, beta, cfg)
+            data = {key: x.flatten(0, 1)[keep] for key, x in dict(
+                obs=rollout["obs"], act=rollout["actions"], logp=logp_old, adv=advantages,
+                ret=returns, logits_old=dist_old.logits).items()}  # pi_old in full, for the KL
+            stats = ppo_update(policy, value_net, optimizer, data, beta, cfg)
             stats["beta"] = beta  # the beta this update used
             beta = adapt_beta(beta, stats["kl"], cfg)  # and the one the next update will use
-            # nan or inf in the losses, the weights or their output: one line, no run folder
+            # --- nan or inf in the losses, weights or outputs: one line, no run folder; log ---
             common.stop_if_diverged(global_step, stats, (policy, value_net), run_dir, obs=next_obs)
-
-            # --- logging ---
-            log(stats)
-            if update % cfg.print_every == 0 or update == 1:
-                elapsed = time.time() - start_time
-                print(f"step {global_step:>7}  {global_step / elapsed:6.0f} steps/s  "
-                      f"return(20) {np.mean(last20) if last20 else float('nan'):6.1f}  "
-                      f"loss_pi {stats['loss_pi']:+.3f}  loss_v {stats['loss_v']:.2e}  "
-                      f"kl {stats['kl']:.4f}  beta {stats['beta']:.3g}  "
-                      f"entropy {stats['entropy']:.3f}  {elapsed:.1f}s", flush=True)
+            log(stats, line=update % cfg.print_every == 0 or update == 1)
     except KeyboardInterrupt:
         interrupted = True
     except (ValueError, RuntimeError):  # e.g. Categorical refusing nan logits: diverged?
@@ -467,7 +470,7 @@ def train(cfg: Config):
     finally:
         envs.close()
         if run_dir.exists():  # common.stop_if_diverged removes a diverged run's folder
-            for step, ep_return in zip(episode_steps, episode_returns):
+            for step, ep_return in episodes:
                 common.append_csv(run_dir / "episodes.csv",
                                   {"global_step": step, "return": ep_return})
             common.save_checkpoint(dict(script="ppo_kl_cartpole", policy=policy.state_dict(),
@@ -476,8 +479,8 @@ def train(cfg: Config):
                                         global_step=global_step), run_dir / "model.pt")
 
     result = dict(run_dir=run_dir, solved=solved_step is not None, solved_step=solved_step,
-                  global_step=global_step, episode_returns=episode_returns, eval_returns=[],
-                  greedy_returns=[], interrupted=interrupted)
+                  global_step=global_step, episode_returns=[r for _, r in episodes],
+                  eval_returns=[], greedy_returns=[], interrupted=interrupted)
     if interrupted:  # the curve so far and where everything is; main() exits with 130
         if cfg.curves and (run_dir / "progress.csv").exists():
             with common.ctrl_c_deferred():  # a second Ctrl-C waits for the picture
@@ -487,7 +490,7 @@ def train(cfg: Config):
               f"(replay: python ppo_kl_cartpole.py --eval {run_dir})", flush=True)
         return result
     elapsed = time.time() - start_time
-    print(f"trained {global_step} steps, {len(episode_returns)} episodes in {elapsed:.1f}s; "
+    print(f"trained {global_step} steps, {len(episodes)} episodes in {elapsed:.1f}s; "
           f"model: {run_dir / 'model.pt'}", flush=True)
 
     # --- after training: the learning curve, evaluation and GIFs ---

@@ -66,7 +66,7 @@ def test_a2c_loss_by_hand():
     model = lambda obs: (logits, values)  # noqa: E731  (a stand-in with known outputs)
     act, adv, ret = torch.tensor([1, 0]), torch.tensor([2.0, -1.0]), torch.tensor([1.5, 1.0])
     cfg = a2c.Config(vf_coef=0.5, ent_coef=0.01)
-    loss, stats = a2c.a2c_loss(model, None, act, adv, ret, cfg)
+    loss, stats = a2c.a2c_loss(model, dict(obs=None, act=act, adv=adv, ret=ret), cfg)
     loss_pi = -(math.log(0.75) * 2.0 + math.log(0.25) * -1.0) / 2  # -mean(log pi(a|s) * A)
     loss_v = 0.5 * ((1.0 - 1.5) ** 2 + (2.0 - 1.0) ** 2) / 2  # 0.5 * mean((V - R)^2)
     entropy = -(0.25 * math.log(0.25) + 0.75 * math.log(0.75))

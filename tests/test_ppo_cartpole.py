@@ -34,7 +34,8 @@ def test_clipped_surrogate_gradient_is_zero_only_on_the_clipped_side(adv, ratio,
     policy = FixedPolicy(torch.log(torch.tensor([[0.4, 0.6]])))
     act = torch.tensor([1])
     logp_old = torch.log(torch.tensor([0.6 / ratio]))  # so that r = pi / pi_old = ratio
-    loss, _, info = ppo.compute_loss_pi(policy, None, act, torch.tensor([adv]), logp_old, 0.2)
+    data = dict(obs=None, act=act, adv=torch.tensor([adv]), logp=logp_old)
+    loss, _, info = ppo.compute_loss_pi(policy, data, 0.2)
     r = ratio
     assert loss.item() == pytest.approx(-min(r * adv, min(max(r, 0.8), 1.2) * adv), rel=1e-5)
     assert info["clipfrac"].item() == (1.0 if abs(r - 1) > 0.2 else 0.0)
@@ -51,12 +52,13 @@ def test_approx_kl_is_zero_at_pi_old_and_positive_after():
     obs, act, adv = torch.randn(64, 4), torch.randint(0, 2, (64,)), torch.randn(64)
     with torch.no_grad():
         logp_old = Categorical(logits=policy(obs)).log_prob(act)
-    _, _, info = ppo.compute_loss_pi(policy, obs, act, adv, logp_old, 0.2)
+    data = dict(obs=obs, act=act, adv=adv, logp=logp_old)
+    _, _, info = ppo.compute_loss_pi(policy, data, 0.2)
     assert info["approx_kl"].item() == pytest.approx(0.0, abs=1e-7)
     with torch.no_grad():
         for p in policy.parameters():
             p.add_(0.3 * torch.randn_like(p))
-    _, _, info = ppo.compute_loss_pi(policy, obs, act, adv, logp_old, 0.2)
+    _, _, info = ppo.compute_loss_pi(policy, data, 0.2)
     assert info["approx_kl"].item() > 1e-4
 
 
@@ -66,30 +68,73 @@ def batch(B=30, seed=0):
     obs, act = torch.randn(B, 4), torch.randint(0, 2, (B,))
     with torch.no_grad():
         logp = Categorical(logits=policy(obs)).log_prob(act)
-    return policy, value_net, obs, act, logp, torch.randn(B), torch.randn(B)
+    return policy, value_net, dict(obs=obs, act=act, logp=logp, adv=torch.randn(B),
+                                   ret=torch.randn(B))
 
 
 @pytest.mark.parametrize("B,minibatches", [(30, 4), (7, 4), (256, 4), (250, 8)])
 def test_update_takes_exactly_epochs_times_minibatches_steps(B, minibatches):
-    policy, value_net, obs, act, logp, adv, ret = batch(B)
+    policy, value_net, data = batch(B)
     opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=1e-3)
     cfg = ppo.Config(update_epochs=3, num_minibatches=minibatches)
-    ppo.ppo_update(policy, value_net, opt, obs, act, logp, adv, ret, cfg)
+    ppo.ppo_update(policy, value_net, opt, data, cfg)
     assert opt.state_dict()["state"][0]["step"].item() == 3 * minibatches
 
 
 def test_early_stop_halts_the_policy_and_keeps_training_v():
     """Tutorial 002: once approx_kl > 1.5 * target_kl, no more policy steps; V goes on."""
-    policy, value_net, obs, act, logp, adv, ret = batch(64)
+    policy, value_net, data = batch(64)
     opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=0.05)
     cfg = ppo.Config(update_epochs=10, num_minibatches=4, target_kl=1e-6)  # stops at once
-    stats = ppo.ppo_update(policy, value_net, opt, obs, act, logp, adv, ret, cfg)
+    stats = ppo.ppo_update(policy, value_net, opt, data, cfg)
     state = opt.state_dict()["state"]
     n_policy = len(list(policy.parameters()))
     steps = [state[i]["step"].item() for i in sorted(state)]
     # The first minibatch sees pi = pi_old (KL 0) and steps; after that the policy is frozen.
     assert steps[:n_policy] == [1] * n_policy and stats["policy_stopped"] == 1
     assert steps[n_policy:] == [40] * (len(steps) - n_policy)  # V: 10 epochs x 4 minibatches
+
+
+def test_early_stop_checks_the_whole_batch_and_sticks(monkeypatch):
+    """Tutorial 002 checks approx_kl on the whole batch before each policy step; once it has
+    stopped the policy, a KL that dips again (here: a scripted one) does not restart it."""
+    policy, value_net, data = batch(64)
+    opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=1e-3)
+    seen, kls = [], iter([0.0, 0.001, 1.0] + [0.0] * 100)  # above 1.5 x 0.01 once, then low
+
+    def approx_kl(policy, batch, cfg):
+        seen.append(len(batch["obs"]))
+        return next(kls)
+
+    monkeypatch.setattr(ppo, "approx_kl", approx_kl)
+    cfg = ppo.Config(update_epochs=10, num_minibatches=4, target_kl=0.01)
+    stats = ppo.ppo_update(policy, value_net, opt, data, cfg)
+    state = opt.state_dict()["state"]
+    n_policy = len(list(policy.parameters()))
+    assert [state[i]["step"].item() for i in range(n_policy)] == [2] * n_policy  # 2 steps, no more
+    assert stats["policy_stopped"] == 1
+    # Checked before the 1st, 2nd and 3rd policy steps, each time on all 64 rows; then only
+    # once more, after the update, for the log.
+    assert seen == [64] * 4
+
+
+def test_logged_approx_kl_is_pi_after_the_update_against_pi_old_on_the_whole_batch():
+    policy, value_net, data = batch(64)
+    opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=0.01)
+    stats = ppo.ppo_update(policy, value_net, opt, data, ppo.Config(update_epochs=4))
+    with torch.no_grad():
+        log_r = Categorical(logits=policy(data["obs"])).log_prob(data["act"]) - data["logp"]
+    assert stats["approx_kl"] == pytest.approx(((log_r.exp() - 1) - log_r).mean().item(), rel=1e-5)
+    assert stats["approx_kl"] > 1e-4
+
+
+def test_the_update_measures_the_ratio_against_pi_old():
+    """After a few steps pi has moved: ratios leave the clip range (a loop that recomputed
+    logp_old from the moving policy would see r = 1 throughout and never clip)."""
+    policy, value_net, data = batch(256)
+    opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=0.05)
+    stats = ppo.ppo_update(policy, value_net, opt, data, ppo.Config(update_epochs=10))
+    assert stats["clipfrac"] > 0.05
 
 
 def test_learning_rate_anneals_linearly_to_zero(tmp_path):

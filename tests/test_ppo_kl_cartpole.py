@@ -36,14 +36,15 @@ def test_loss_penalizes_moving_away_from_pi_old():
     with torch.no_grad():
         logits_old = policy(obs)
     logp_old = Categorical(logits=logits_old).log_prob(act)
-    loss0, _, info = kl.compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta=5.0)
+    data = dict(obs=obs, act=act, adv=adv, logp=logp_old, logits_old=logits_old)
+    loss0, _, info = kl.compute_loss_pi(policy, data, beta=5.0)
     assert loss0.item() == pytest.approx(-adv.mean().item(), abs=1e-6)  # r = 1, KL = 0
     assert info["kl"].item() == pytest.approx(0.0, abs=1e-7)
     with torch.no_grad():
         for p in policy.parameters():
             p.add_(0.5 * torch.randn_like(p))
-    loss_b0, _, _ = kl.compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta=0.0)
-    loss_b5, _, info = kl.compute_loss_pi(policy, obs, act, adv, logp_old, logits_old, beta=5.0)
+    loss_b0, _, _ = kl.compute_loss_pi(policy, data, beta=0.0)
+    loss_b5, _, info = kl.compute_loss_pi(policy, data, beta=5.0)
     # KL(pi_old || pi) by hand: sum_a pi_old(a|s) (log pi_old(a|s) - log pi(a|s)), averaged.
     lp_old, lp = torch.log_softmax(logits_old, -1), torch.log_softmax(policy(obs), -1)
     d = (lp_old.exp() * (lp_old - lp)).sum(-1).mean()
