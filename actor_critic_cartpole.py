@@ -157,6 +157,9 @@ class Config:
     eval: str | None = None
     """a saved model.pt or its run folder: skip training, play eval_episodes episodes (as
     after training: actions drawn from pi, then greedy)"""
+    gif: str | None = None
+    """with --eval: write one episode of the saved policy (actions drawn from pi, as
+    after.gif) to this GIF file instead (no display needed)"""
     threads: int = 1
     """torch CPU threads (1 .. cores); the same seed gives the same logs only with the same
     count (threads change float sums). Networks this small have little work to share out"""
@@ -174,6 +177,8 @@ class Config:
         common.check(self.total_timesteps >= batch,
                      f"--total-timesteps ({self.total_timesteps}) is less than one rollout "
                      f"(num_envs x num_steps = {batch}): nothing would be learned")
+        common.check(not self.gif or self.eval,
+                     "--gif writes a GIF of a saved policy: it needs --eval")
 
 
 # =============================================================================
@@ -461,12 +466,18 @@ def train(cfg: Config):
 
 def play(cfg: Config):
     """--eval PATH: load a saved model, play cfg.eval_episodes episodes with actions drawn from
-    pi (shown with --watch), then as many greedy ones. Returns the first ones' returns."""
+    pi (shown with --watch), then as many greedy ones. Returns the first ones' returns.
+    With --gif: write one episode, drawn as after.gif is, to that file instead."""
     ckpt = common.load_checkpoint(cfg.eval, script="actor_critic_cartpole",
                                   required=("model", "obs_dim", "n_actions", "config"))
     model = ActorCritic(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
     common.load_weights(model, ckpt["model"], cfg.eval)
     env_id = ckpt["config"]["env_id"]
+    if cfg.gif:  # one episode to a GIF file, as after.gif is drawn
+        ret = common.record_gif(env_id, act_fn(model, "cpu", cfg.eval_seed), cfg.gif,
+                                cfg.eval_seed, every=2, scale=2)
+        print(f"{cfg.gif}: one episode, return {ret:.0f}", flush=True)
+        return [ret]
     print(f"playing {cfg.eval_episodes} episodes of {env_id} with {cfg.eval}"
           + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
     returns = common.evaluate(env_id, act_fn(model, "cpu", cfg.eval_seed), cfg.eval_episodes,

@@ -113,6 +113,20 @@ def test_eval_reloads_the_saved_model(script, tmp_path):
     assert f"returns {[round(r) for r in result['eval_returns']]}" in p.stdout
 
 
+def test_eval_gif_draws_the_saved_model_as_after_gif_without_a_display(script, tmp_path):
+    """--eval RUN --gif OUT: one episode of the saved policy, headless, drawn exactly as the
+    run's after.gif was (same policy, same draws, same env seed)."""
+    import imageio.v3 as iio
+
+    result = script.train(small(script, tmp_path / "run", total_timesteps=2048,
+                                stop_when_solved=False, curves=False, eval_episodes=1))
+    out = tmp_path / "cartpole.gif"
+    p = run_script(f"{script.__name__}.py", "--eval", result["run_dir"], "--gif", out)
+    assert p.returncode == 0, p.stderr
+    assert f"{out}: one episode, return" in p.stdout
+    assert np.array_equal(iio.imread(out), iio.imread(result["run_dir"] / "after.gif"))
+
+
 def test_help_of_the_real_script(script):
     p = run_script(f"{script.__name__}.py", "--help", timeout=120)
     assert p.returncode == 0, p.stderr
@@ -135,6 +149,7 @@ def test_train_works_from_a_notebook(script, tmp_path, monkeypatch):
     (["--num-envs", "1000", "--num-steps", "100000000", "--total-timesteps", "10000000000000"],
      "not enough memory"),
     (["--learning-rate", "abc"], "invalid float value"),
+    (["--gif", "out.gif"], "it needs --eval"),
     (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
     (["--env-id", "Pendulum-v1"], "needs Discrete actions"),
     (["--run-dir", "{file}/runs"], "cannot create run folder"),
