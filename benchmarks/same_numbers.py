@@ -15,6 +15,7 @@ Prints SAME or DIFFERENT per file, and exits 1 if any file differs or is missing
 """
 
 import argparse
+import csv
 import filecmp
 import subprocess
 import sys
@@ -54,6 +55,16 @@ def run(tree, script, flags, out):
     return run_dir
 
 
+def columns_that_differ(a, b):
+    """Which columns of two CSV logs differ: a few words for the DIFFERENT line."""
+    rows_a, rows_b = (list(csv.DictReader(open(path))) for path in (a, b))
+    if len(rows_a) != len(rows_b) or rows_a and list(rows_a[0]) != list(rows_b[0]):
+        return "rows or columns differ"
+    header = list(rows_a[0]) if rows_a else []
+    changed = [k for k in header if any(x[k] != y[k] for x, y in zip(rows_a, rows_b))]
+    return "columns: " + ", ".join(changed)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -86,7 +97,10 @@ def main():
                         continue
                     same = a.exists() and b.exists() and filecmp.cmp(a, b, shallow=False)
                     differ += not same
-                    print(f"{name:28} {log:16} {'SAME' if same else 'DIFFERENT'}", flush=True)
+                    verdict = "SAME" if same else "DIFFERENT"
+                    if not same and a.exists() and b.exists():
+                        verdict += f" ({columns_that_differ(a, b)})"
+                    print(f"{name:28} {log:16} {verdict}", flush=True)
         finally:
             if not folder:
                 subprocess.run(["git", "worktree", "remove", "--force", str(old_tree)], cwd=ROOT)
