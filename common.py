@@ -415,7 +415,7 @@ def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
         if run_dir is not None:
             shutil.rmtree(run_dir, ignore_errors=True)
         raise UserError(f"training diverged at step {step}: nan or inf in {', '.join(bad)}; likely "
-                        "cause: too high a learning rate (try a smaller --learning-rate)"
+                        "cause: too high a learning rate (try a smaller one)"
                         + (f"; {run_dir} was removed" if run_dir is not None else ""))
 
 

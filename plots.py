@@ -61,10 +61,13 @@ def draw_run(run_dir, solved_return=None, solved_step=None):
                             read_csv(run_dir / "progress.csv"), solved_return, solved_step)
     fig.axes[0].set_title(run_dir.name, fontsize=8)
     fig.tight_layout()
-    path = run_dir / "curve.png"
-    fig.savefig(f"{path}.tmp.png", dpi=90)  # then renamed: a reader never sees half a file
-    plt.close(fig)
-    Path(f"{path}.tmp.png").replace(path)
+    path, tmp = run_dir / "curve.png", Path(f"{run_dir / 'curve.png'}.tmp.png")
+    try:  # written aside, then renamed: a reader never sees half a file, Ctrl-C or not
+        fig.savefig(tmp, dpi=90)
+        tmp.replace(path)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
     return path
 
 
