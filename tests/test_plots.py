@@ -114,3 +114,20 @@ def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path):
     p = run_script("plots.py", short, long, walker, "--out", tmp_path / "compare.png")
     assert p.returncode == 0, p.stderr
     assert_curve_drawn(tmp_path / "compare.png")
+
+
+def test_ctrl_c_while_curve_png_is_written_keeps_the_old_one_and_no_tmp(tmp_path, monkeypatch):
+    import plots
+    from matplotlib.figure import Figure
+
+    run = quick_run(tmp_path, seed=0)["run_dir"]
+    before = (run / "curve.png").read_bytes()
+
+    def interrupted_savefig(self, fname, **kw):
+        open(fname, "wb").write(b"half a png")  # the write has begun...
+        raise KeyboardInterrupt  # ...when Ctrl-C lands
+    monkeypatch.setattr(Figure, "savefig", interrupted_savefig)
+    with pytest.raises(KeyboardInterrupt):
+        plots.draw_run(run)
+    assert (run / "curve.png").read_bytes() == before
+    assert not list(run.glob("*.tmp*"))
