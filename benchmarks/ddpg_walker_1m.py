@@ -67,6 +67,10 @@ def start(parent):
         proc = subprocess.Popen(["nice", "-n", "19", sys.executable, str(ROOT / "ddpg_walker.py"),
                                  *how], stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,
                                 start_new_session=True)
+        try:  # Linux groups a new session's processes: nice must be set for the group too
+            Path(f"/proc/{proc.pid}/autogroup").write_text("19")
+        except OSError:
+            pass
         (parent / f"seed{seed}.pid").write_text(str(proc.pid))
         print(f"seed {seed}: {'continuing from step ' + str(step) if step else 'started'} "
               f"(pid {proc.pid}, log {parent / f'seed{seed}.log'})")
