@@ -53,8 +53,8 @@ def test_loss_penalizes_moving_away_from_pi_old():
 
 
 def test_beta_and_kl_are_logged(tmp_path):
-    result = kl.train(kl.Config(run_dir=str(tmp_path), total_timesteps=3000, stop_when_solved=False, gifs=False,
-                                eval_episodes=1, print_every=10**6))
+    result = kl.train(kl.Config(run_dir=str(tmp_path), total_timesteps=3000, stop_when_solved=False,
+                                gifs=False, eval_episodes=1, print_every=10**6))
     import csv
 
     rows = list(csv.DictReader(open(result["run_dir"] / "progress.csv")))
@@ -64,4 +64,5 @@ def test_beta_and_kl_are_logged(tmp_path):
     # Every change follows the rule: by the factor 2, in the direction the KL asked for.
     for prev, cur, row in zip(betas, betas[1:], rows):
         d = float(row["kl"])
-        assert cur == pytest.approx(prev / 2 if d < 0.01 / 1.5 else prev * 2 if d > 0.015 else prev, rel=1e-4)
+        expected = prev / 2 if d < 0.01 / 1.5 else prev * 2 if d > 0.015 else prev
+        assert cur == pytest.approx(expected, rel=1e-4)
