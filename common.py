@@ -1,18 +1,7 @@
 """Small helpers shared by every script: returns and GAE, evaluation and GIFs, plumbing.
 The training loops live in the scripts, each read top to bottom on its own."""
 
-import argparse
-import ast
-import contextlib
-import csv
-import dataclasses
-import inspect
-import os
-import shutil
-import signal
-import sys
-import textwrap
-import time
+import argparse, ast, contextlib, csv, dataclasses, inspect, os, shutil, signal, sys, textwrap, time
 from pathlib import Path
 
 # --- Ctrl-C while a script starts (torch and gymnasium below take a second or more to import):
@@ -40,69 +29,53 @@ import torch  # noqa: E402
 
 
 # ====================== Returns and advantages ======================================
-# Both work on rollouts shaped (T, N): T time steps of N parallel envs.
-# next_values[t] is V(s_{t+1}), the value of the obs that step t led to. The bootstrap
-# rule (Spinning Up's finish_path(last_val)): at terminated[t] the episode really ended
-# and the future is 0; at truncated[t] (a time limit) and at t = T-1 (the rollout ran
-# out) the future is not 0: bootstrap with next_values[t]. Termination wins over both.
-
+# Rollouts are shaped (T, N): T time steps of N parallel envs; next_values[t] is V(s_{t+1}), the
+# value of the obs that step t led to. The bootstrap rule (Spinning Up's finish_path(last_val)):
+# at terminated[t] the episode really ended and the future is 0; at truncated[t] (a time limit)
+# and at t = T-1 (the rollout ran out) it is not: bootstrap with next_values[t]. Termination wins.
 def discounted_returns(rewards, next_values, terminated, truncated, gamma):
-    """Reward-to-go G_t = r_t + gamma * G_{t+1}, cut at episode ends (bootstrap rule above).
-
-    In a rollout of T steps this is A3C's n-step return: rewards up to the
-    rollout's end, then gamma^k * V of the state there. With gamma=0.5:
-
-    >>> r = torch.tensor([[1.], [1.], [1.]])            # T=3, N=1
-    >>> v = torch.tensor([[9.], [9.], [4.]])            # V(s_{t+1})
-    >>> no = torch.zeros(3, 1, dtype=torch.bool)
-    >>> discounted_returns(r, v, no, no, 0.5).flatten().tolist()
+    """Reward-to-go G_t = r_t + gamma * G_{t+1}, cut at episode ends (bootstrap rule above); over
+    a rollout of T steps, A3C's n-step return (rewards to its end, then gamma^k * V there).
+    >>> r, v = torch.tensor([[1.], [1.], [1.]]), torch.tensor([[9.], [9.], [4.]])  # v: V(s_{t+1})
+    >>> no, at1 = torch.zeros(3, 1, dtype=torch.bool), torch.tensor([[False], [True], [False]])
+    >>> discounted_returns(r, v, no, no, 0.5).flatten().tolist()  # gamma=0.5, T=3, N=1
     [2.25, 2.5, 3.0]
-    >>> at1 = torch.tensor([[False], [True], [False]])   # the episode ends at t=1
-    >>> discounted_returns(r, v, at1, no, 0.5).flatten().tolist()  # terminated: no future
+    >>> discounted_returns(r, v, at1, no, 0.5).flatten().tolist()  # terminated at t=1: no future
     [1.5, 1.0, 3.0]
-    >>> discounted_returns(r, v, no, at1, 0.5).flatten().tolist()  # truncated: + 0.5 * 9
+    >>> discounted_returns(r, v, no, at1, 0.5).flatten().tolist()  # truncated at t=1: + 0.5 * 9
     [3.75, 5.5, 3.0]
     """
-    returns = torch.zeros_like(rewards)
-    future = next_values[-1]  # bootstrap past the end of the rollout
+    returns, future = torch.zeros_like(rewards), next_values[-1]  # bootstrap past the rollout
     for t in reversed(range(len(rewards))):
         future = torch.where(truncated[t], next_values[t], future)  # time limit: V(final obs)
         future = torch.where(terminated[t], torch.zeros_like(future), future)  # no future at all
-        returns[t] = rewards[t] + gamma * future
-        future = returns[t]
+        returns[t] = future = rewards[t] + gamma * future
     return returns
 
 def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
-    """Generalized advantage estimation (Schulman et al. 2016, eq. 16).
+    """Generalized advantage estimation (Schulman et al. 2016, eq. 16), shaped like `rewards`:
 
         delta_t = r_t + gamma * V(s_{t+1}) * (1 - terminated_t) - V(s_t)
         A_t     = delta_t + gamma * lam * (1 - done_t) * A_{t+1},  done = terminated or truncated
 
-    A truncated step keeps gamma * V(final obs) in its delta (bootstrap) but
-    stops the sum over later deltas, which belong to the next episode. lam=1
-    gives G_t - V(s_t); lam=0 the one-step TD error. With gamma=0.5, lam=1:
-
-    >>> r = torch.tensor([[1.], [1.]]); v = torch.tensor([[1.], [2.]])
-    >>> nv = torch.tensor([[2.], [4.]]); no = torch.zeros(2, 1, dtype=torch.bool)
-    >>> gae(r, v, nv, no, no, 0.5, 1.0).flatten().tolist()
+    A truncated step keeps gamma * V(final obs) in its delta (bootstrap) but stops the sum over
+    later deltas, of the next episode. lam=1 gives G_t - V(s_t), lam=0 the one-step TD error; the
+    value targets are A + V. With gamma=0.5, lam=1: delta_1 = 1 + 0.5*4 - 2 = 1, delta_0 = 1:
+    >>> r, v = torch.tensor([[1.], [1.]]), torch.tensor([[1.], [2.]])
+    >>> nv, no = torch.tensor([[2.], [4.]]), torch.zeros(2, 1, dtype=torch.bool)
+    >>> gae(r, v, nv, no, no, 0.5, 1.0).flatten().tolist()  # A_0 = 1 + 0.5 * A_1
     [1.5, 1.0]
-
-    (delta_1 = 1 + 0.5*4 - 2 = 1; delta_0 = 1 + 0.5*2 - 1 = 1; A_0 = 1 + 0.5*1.)
-    Returns advantages shaped like `rewards`; the value targets are A + V.
     """
-    advantages = torch.zeros_like(rewards)
+    advantages, last = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
     not_terminated = (~terminated).to(rewards.dtype)
     not_done = (~(terminated | truncated)).to(rewards.dtype)
-    last = torch.zeros_like(rewards[0])
     for t in reversed(range(len(rewards))):
         delta = rewards[t] + gamma * next_values[t] * not_terminated[t] - values[t]
-        last = delta + gamma * lam * not_done[t] * last
-        advantages[t] = last
+        last = advantages[t] = delta + gamma * lam * not_done[t] * last
     return advantages
 
 
 # ====================== Running a policy (a function obs -> action): evaluation, GIFs ==
-
 def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, **make_kw):
     """Returns of `episodes` episodes of `policy`, the env seeded once with `seed`. render_mode=
     "human" shows a window (make_kw go to gym.make); log=True prints each return as it ends.
@@ -129,14 +102,11 @@ def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, **make
     return returns
 
 def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scale=1, **make_kw):
-    """Play one episode off-screen, write it to `path` as a looping GIF; return its return.
-    Keeps one frame in `every` (fps lowered to match) and at most `max_frames`, each
-    `scale` times smaller (pixel blocks averaged: thin lines stay visible). The episode
-    is played to its end either way. `path` appears whole or not at all."""
+    """Play one episode off-screen; return its return. One frame in `every` (fps lowered to match),
+    at most `max_frames`, `scale` times smaller, go to `path` as a looping GIF (whole or none)."""
     import imageio.v2 as imageio
     from PIL import Image  # installed with imageio
-
-    def frame():  # Image.reduce: each pixel the mean of a scale x scale block
+    def frame():  # Image.reduce: each pixel the mean of a scale x scale block (thin lines stay)
         return np.asarray(Image.fromarray(env.render()).reduce(scale))
 
     with env_errors(env_id):
@@ -165,14 +135,12 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
 
 
 # ====================== Plumbing: envs, flags, run folders, logs, checkpoints, errors ==
-
 class UserError(Exception):
     """Bad input the user can fix: printed as one line, exit code 2 (see clear_exit)."""
 
 @contextlib.contextmanager
 def clear_exit():
-    """Bad input: one `error:` line, exit 2. Ctrl-C: one line, exit 130 (callers save first),
-    also when a library turned it into another error (see from_ctrl_c)."""
+    """Bad input: one `error:` line, exit 2. Ctrl-C, even turned into another error: exit 130."""
     if signal.getsignal(signal.SIGINT) is _ctrl_c_while_starting:  # the imports are done
         signal.signal(signal.SIGINT, signal.default_int_handler)  # Ctrl-C: KeyboardInterrupt
     try:
@@ -181,8 +149,7 @@ def clear_exit():
         print(f"error: {e}", file=sys.stderr, flush=True)
         sys.exit(2)
     except (KeyboardInterrupt, ImportError, RuntimeError, gym.error.Error) as e:
-        if not from_ctrl_c(e):
-            raise
+        if not from_ctrl_c(e): raise
         print("\ninterrupted (Ctrl-C)", file=sys.stderr, flush=True)
         sys.exit(130)
 
@@ -206,10 +173,8 @@ def ctrl_c_deferred():
     try:
         yield
     finally:
-        if before is not None:
-            signal.signal(signal.SIGINT, before)
-        if pressed:
-            signal.raise_signal(signal.SIGINT)  # the held Ctrl-C, now
+        if before is not None: signal.signal(signal.SIGINT, before)
+        if pressed: signal.raise_signal(signal.SIGINT)  # the held Ctrl-C, now
 
 @contextlib.contextmanager
 def env_errors(env_id):
@@ -227,10 +192,9 @@ def env_errors(env_id):
                         "steps?)") from None
 
 def make_vec_env(env_id, num_envs, seed, solved_return=None):
-    """gym.make_vec of a Discrete-action env, reset with `seed`; returns (envs, obs, the
-    return that counts as solved: `solved_return`, else the env's reward_threshold).
-    Autoreset is NEXT_STEP (gymnasium 1.x's default; see the scripts' loops), and
-    RecordEpisodeStatistics reports finished episodes in info["episode"], info["_episode"]."""
+    """gym.make_vec of a Discrete-action env reset with `seed` -> (envs, obs, the solved return:
+    `solved_return`, else reward_threshold). Autoreset is NEXT_STEP (gymnasium 1.x's default; see
+    the scripts' loops); RecordEpisodeStatistics puts finished episodes in info["episode"]."""
     with env_errors(env_id):
         envs = gym.wrappers.vector.RecordEpisodeStatistics(gym.make_vec(env_id, num_envs))
         assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
@@ -245,25 +209,23 @@ def make_vec_env(env_id, num_envs, seed, solved_return=None):
     return envs, obs, solved
 
 def finished_episodes(info, step, episodes, threshold, window=20):
-    """Episode bookkeeping after a step of make_vec_env's envs: `episodes` holds (step, return)
-    of each episode finished so far. Returns those that ended at this `step`, as (step, return)
-    pairs, and whether the run is solved: the last `window` returns, these included, average
-    `threshold` or more. (RecordEpisodeStatistics marks the envs whose episode ended.)
+    """`episodes`: (step, return) of each episode finished so far. Returns the pairs that ended at
+    this `step` of make_vec_env's envs, and whether the last `window` returns average `threshold`+.
     >>> info = {"episode": {"r": np.array([9.0, 30.0])}, "_episode": np.array([False, True])}
     >>> finished_episodes(info, 64, episodes=[(8, 20.0)] * 19, threshold=20)
     ([(64, 30.0)], True)
     """
     ended = ([(step, float(r)) for r in info["episode"]["r"][info["_episode"]]]
-             if "episode" in info else [])
+             if "episode" in info else [])  # _episode: the envs whose episode ended
     last = [r for _, r in (episodes[-window:] + ended)[-window:]]
     return ended, len(last) == window and bool(np.mean(last) >= threshold)
 
 def parse_config(cls, argv=None, description=None):
-    """Build a `cls` (a @dataclass) from flags: `num_envs: int = 8` becomes `--num-envs 8`,
-    the string under the field its help; a bool becomes `--name/--no-name`; `x: float | None`
-    also takes `none`. A ValueError from cls.__post_init__ becomes one line and exit 2."""
-    parser = _Parser(description=description,
-                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    """A @dataclass `cls` from flags: `num_envs: int = 8` -> `--num-envs 8` (help: the string under
+    it), bool -> `--x/--no-x`, `float | None` also takes `none`; ValueError -> one line, exit 2."""
+    parser = argparse.ArgumentParser(description=description,
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage
     body = ast.parse(textwrap.dedent(inspect.getsource(cls))).body[0].body
     docs = {node.target.id: " ".join(str(nxt.value.value).split())  # the string under each field
             for node, nxt in zip(body, body[1:]) if isinstance(node, ast.AnnAssign)
@@ -271,16 +233,11 @@ def parse_config(cls, argv=None, description=None):
     for f in dataclasses.fields(cls):
         name = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
         kind = name.replace(" | None", "")  # "float | None" -> "float"
-        if kind == "bool":
-            how = dict(action=argparse.BooleanOptionalAction)
-        else:
-            convert = {"int": int, "float": float, "str": str}[kind]
-            if "None" in name:  # also accept `none`
-                convert = _or_none(convert)
-            how = dict(type=convert, metavar=kind.upper())
-        help_text = docs.get(f.name, "").replace("%", "%%")  # argparse reads % as a format
-        parser.add_argument("--" + f.name.replace("_", "-"), default=f.default, help=help_text,
-                            **how)
+        convert = {"int": int, "float": float, "str": str, "bool": bool}[kind]
+        how = dict(type=_or_none(convert) if "None" in name else convert, metavar=kind.upper())
+        if kind == "bool": how = dict(action=argparse.BooleanOptionalAction)
+        parser.add_argument("--" + f.name.replace("_", "-"), default=f.default, **how,
+                            help=docs.get(f.name, "").replace("%", "%%"))  # % starts a format
     args = parser.parse_args(argv)
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):
@@ -293,10 +250,6 @@ def parse_config(cls, argv=None, description=None):
     except ValueError as e:
         parser.error(str(e))
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line and exit 2, instead of a usage dump
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
 def _or_none(convert):
     def parse(text):
         return None if text.lower() == "none" else convert(text)
@@ -305,8 +258,7 @@ def _or_none(convert):
 
 def check(condition, message):
     """For Config.__post_init__: raise ValueError(message) unless `condition`."""
-    if not condition:
-        raise ValueError(message)
+    if not condition: raise ValueError(message)
 
 RANGES = {"> 0": (lambda v: v > 0, "positive"), ">= 0": (lambda v: v >= 0, ">= 0"),
           "> 1": (lambda v: v > 1, "> 1"), "(0, 1]": (lambda v: 0 < v <= 1, "in (0, 1]"),
@@ -344,13 +296,11 @@ def append_csv(path, row):
     new = not Path(path).exists()
     with open(path, "a", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(row))
-        if new:
-            writer.writeheader()
+        if new: writer.writeheader()
         writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
 
 def save_checkpoint(obj, path):
-    """torch.save to a temporary file, flushed to disk, then renamed: never half a file and
-    never a .tmp left, Ctrl-C or not (a Ctrl-C waits until the file is whole)."""
+    """torch.save to a .tmp, flushed to disk, renamed: no half file nor .tmp, Ctrl-C or not."""
     tmp = Path(f"{path}.tmp")
     with ctrl_c_deferred():
         try:
@@ -368,8 +318,7 @@ def load_checkpoint(path, required=(), script=None):
     """torch.load(weights_only=True), or one clear UserError; a run folder means its model.pt.
     With `script` (e.g. "ppo_cartpole"), a checkpoint that names another script is refused."""
     path = Path(path) / "model.pt" if Path(path).is_dir() else Path(path)
-    if not path.is_file():
-        raise UserError(f"no checkpoint at {path}")
+    if not path.is_file(): raise UserError(f"no checkpoint at {path}")
     try:  # weights_only: tensors and plain values, never arbitrary Python objects
         ckpt = torch.load(path, map_location="cpu", weights_only=True)
     except Exception:  # cut short, damaged, not a torch file, or Python objects inside
@@ -399,9 +348,8 @@ def pick_device(cuda):
     return torch.device("cuda" if cuda and torch.cuda.is_available() else "cpu")
 
 def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
-    """nan or inf in `losses` (name -> number), in the weights of `nets` or in their output
-    for `obs`: training diverged, its model is worth nothing. Remove `run_dir` and raise one
-    UserError naming the step and the likely cause."""
+    """nan or inf in `losses` (name -> number), in the weights of `nets` or in their output for
+    `obs`: training diverged. Remove `run_dir`; raise one UserError naming step and likely cause."""
     bad = [name for name, value in losses.items() if not np.isfinite(float(value))]
     for net in nets:
         tensors = list(net.parameters())
@@ -412,10 +360,7 @@ def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
         if not all(bool(t.isfinite().all()) for t in tensors):
             bad.append(f"{type(net).__name__}'s weights or output")
     if bad:
-        if run_dir is not None:
-            shutil.rmtree(run_dir, ignore_errors=True)
+        if run_dir is not None: shutil.rmtree(run_dir, ignore_errors=True)
         raise UserError(f"training diverged at step {step}: nan or inf in {', '.join(bad)}; likely "
                         "cause: too high a learning rate (try a smaller one)"
                         + (f"; {run_dir} was removed" if run_dir is not None else ""))
-
-
