@@ -4,9 +4,8 @@ The training loops live in the scripts, each read top to bottom on its own."""
 import argparse, ast, contextlib, csv, dataclasses, inspect, os, shutil, signal, sys, textwrap, time
 from pathlib import Path
 
-# --- Ctrl-C while a script starts (torch and gymnasium below take a second or more to import):
-# one line and exit 130, not a traceback through importlib. Only when a script beside this file
-# is the program (it imports common first), never in a notebook; clear_exit() takes over.
+# --- Ctrl-C while torch and gymnasium load (a second or more): one line and exit 130, when a
+# script beside this file is the program (never in a notebook); clear_exit() takes over after.
 def _ctrl_c_while_starting(signum, frame):
     print("\ninterrupted (Ctrl-C)", file=sys.stderr, flush=True)
     os._exit(130)  # nothing to save yet; an exception would pass through C import code
@@ -26,7 +25,6 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 import gymnasium as gym  # noqa: E402  (after the environment variables above)
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
-
 
 # ====================== Returns and advantages ======================================
 # Rollouts are shaped (T, N): T time steps of N parallel envs; next_values[t] is V(s_{t+1}), the
@@ -74,14 +72,10 @@ def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
         last = advantages[t] = delta + gamma * lam * not_done[t] * last
     return advantages
 
-
 # ====================== Running a policy (a function obs -> action): evaluation, GIFs ==
 def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, **make_kw):
     """Returns of `episodes` episodes of `policy`, the env seeded once with `seed`. render_mode=
-    "human" shows a window (make_kw go to gym.make); log=True prints each return as it ends.
-    >>> evaluate("CartPole-v1", lambda obs: 0, episodes=2, seed=0)  # always push left
-    [11.0, 9.0]
-    """
+    "human" shows a window (make_kw go to gym.make); log=True prints each return as it ends."""
     with env_errors(env_id):
         env = gym.make(env_id, render_mode=render_mode, **make_kw)
     returns = []
@@ -104,11 +98,9 @@ def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, **make
 def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scale=1, **make_kw):
     """Play one episode off-screen; return its return. One frame in `every` (fps lowered to match),
     at most `max_frames`, `scale` times smaller, go to `path` as a looping GIF (whole or none)."""
-    import imageio.v2 as imageio
-    from PIL import Image  # installed with imageio
+    import imageio.v2 as imageio, PIL.Image  # PIL comes with imageio
     def frame():  # Image.reduce: each pixel the mean of a scale x scale block (thin lines stay)
-        return np.asarray(Image.fromarray(env.render()).reduce(scale))
-
+        return np.asarray(PIL.Image.fromarray(env.render()).reduce(scale))
     with env_errors(env_id):
         env = gym.make(env_id, render_mode="rgb_array", **make_kw)
     frames, total, t, done = [], 0.0, 0, False
@@ -122,17 +114,9 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
                 frames.append(frame())
     finally:
         env.close()
-    tmp = Path(f"{path}.tmp")
-    with ctrl_c_deferred():  # a Ctrl-C now waits until the GIF is whole (a second at most)
-        try:
-            imageio.mimsave(tmp, frames, format="GIF", duration=1000 * every / fps, loop=0)
-            os.replace(tmp, path)
-        except OSError as e:
-            raise UserError(f"cannot write {path}: {e}") from None
-        finally:
-            tmp.unlink(missing_ok=True)
+    with written_whole(path) as tmp:  # a Ctrl-C waits until the GIF is whole (a second at most)
+        imageio.mimsave(tmp, frames, format="GIF", duration=1000 * every / fps, loop=0)
     return total
-
 
 # ====================== Plumbing: envs, flags, run folders, logs, checkpoints, errors ==
 class UserError(Exception):
@@ -154,17 +138,14 @@ def clear_exit():
         sys.exit(130)
 
 def from_ctrl_c(error):
-    """Is `error` a KeyboardInterrupt, or one that a library raised because of it? A Ctrl-C
-    during an import in C (MuJoCo's, in gym.make) becomes ImportError("initialization
-    failed") inside DependencyNotInstalled; one in a torch write becomes a RuntimeError."""
+    """Is `error` a KeyboardInterrupt, or raised because of one (MuJoCo's import, a torch write)?"""
     while error is not None and not isinstance(error, KeyboardInterrupt):
         error = error.__cause__ or error.__context__  # Python keeps this chain free of loops
     return error is not None
 
 @contextlib.contextmanager
 def ctrl_c_deferred():
-    """Hold a Ctrl-C back while the block runs (a file write that must not stop half way),
-    then deliver it through the handler it was held from: KeyboardInterrupt after the block."""
+    """Hold a Ctrl-C back while the block runs (a file write), then deliver it."""
     before, pressed = signal.getsignal(signal.SIGINT), []
     try:
         signal.signal(signal.SIGINT, lambda signum, frame: pressed.append(signum))
@@ -188,13 +169,11 @@ def env_errors(env_id):
     except gym.error.Error as e:  # NameNotFound, VersionNotFound, ...
         raise UserError(f"unknown environment {env_id!r}: {e}") from None
     except MemoryError:
-        raise UserError(f"not enough memory for {env_id} at these sizes (too many envs or "
-                        "steps?)") from None
+        raise UserError(f"not enough memory for {env_id} (too many envs or steps?)") from None
 
 def make_vec_env(env_id, num_envs, seed, solved_return=None):
-    """gym.make_vec of a Discrete-action env reset with `seed` -> (envs, obs, the solved return:
-    `solved_return`, else reward_threshold). Autoreset is NEXT_STEP (gymnasium 1.x's default; see
-    the scripts' loops); RecordEpisodeStatistics puts finished episodes in info["episode"]."""
+    """gym.make_vec of a Discrete-action env, reset with `seed`, autoreset NEXT_STEP (gymnasium
+    1.x's default), ended episodes in info["episode"] -> (envs, obs, the solved return)."""
     with env_errors(env_id):
         envs = gym.wrappers.vector.RecordEpisodeStatistics(gym.make_vec(env_id, num_envs))
         assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
@@ -209,12 +188,8 @@ def make_vec_env(env_id, num_envs, seed, solved_return=None):
     return envs, obs, solved
 
 def finished_episodes(info, step, episodes, threshold, window=20):
-    """`episodes`: (step, return) of each episode finished so far. Returns the pairs that ended at
-    this `step` of make_vec_env's envs, and whether the last `window` returns average `threshold`+.
-    >>> info = {"episode": {"r": np.array([9.0, 30.0])}, "_episode": np.array([False, True])}
-    >>> finished_episodes(info, 64, episodes=[(8, 20.0)] * 19, threshold=20)
-    ([(64, 30.0)], True)
-    """
+    """`episodes`: (step, return) of each finished episode. Returns the pairs that ended at this
+    `step` of make_vec_env's envs, and whether the last `window` returns average `threshold`+."""
     ended = ([(step, float(r)) for r in info["episode"]["r"][info["_episode"]]]
              if "episode" in info else [])  # _episode: the envs whose episode ended
     last = [r for _, r in (episodes[-window:] + ended)[-window:]]
@@ -243,17 +218,19 @@ def parse_config(cls, argv=None, description=None):
         if isinstance(value, float) and not np.isfinite(value):
             parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")
     if getattr(args, "watch", False) and HEADLESS:  # fail now, not after hours of training
-        parser.error("--watch opens a window, but this machine has no display (the GIFs in "
-                     "the run folder show the agent)")
+        parser.error("--watch opens a window, but this machine has no display (see the GIFs)")
     try:
-        return cls(**vars(args))
+        cfg = cls(**vars(args))
     except ValueError as e:
         parser.error(str(e))
+    if getattr(cfg, "cuda", False) and not cls.cuda and not torch.cuda.is_available():  # asked
+        print("warning: --cuda, but torch sees no GPU here (a CPU-only torch, or no driver): "
+              "running on the CPU", file=sys.stderr, flush=True)  # as the scripts then do
+    return cfg
 
-def _or_none(convert):
-    def parse(text):
-        return None if text.lower() == "none" else convert(text)
-    parse.__name__ = convert.__name__  # argparse names the type in its errors
+def _or_none(convert):  # a flag's type that also takes "none"; argparse names it in errors
+    parse = lambda text: None if text.lower() == "none" else convert(text)  # noqa: E731
+    parse.__name__ = convert.__name__
     return parse
 
 def check(condition, message):
@@ -266,11 +243,7 @@ RANGES = {"> 0": (lambda v: v > 0, "positive"), ">= 0": (lambda v: v >= 0, ">= 0
 
 def check_ranges(config, **ranges):
     """For Config.__post_init__: each named field lies in its range (a key of RANGES; "... or
-    none" also lets None through), else ValueError. Checks relating two fields stay explicit.
-    >>> check_ranges(argparse.Namespace(gamma=1.5, lam=None), lam="[0, 1] or none", gamma="(0, 1]")
-    Traceback (most recent call last):
-    ValueError: --gamma must be in (0, 1], got 1.5
-    """
+    none" also lets None through), else ValueError. Checks relating two fields stay explicit."""
     for name, allowed in ranges.items():
         value, optional = getattr(config, name), allowed.endswith(" or none")
         inside, words = RANGES[allowed.removesuffix(" or none")]
@@ -281,13 +254,13 @@ def check_ranges(config, **ranges):
 def make_run_dir(root, script, env_id, seed):
     """Create and return <root>/<script>__<env>__seed<k>__<timestamp>[-i]/."""
     name = f"{Path(script).stem}__{env_id.replace('/', '-')}__seed{seed}__"
-    path = base = Path(root) / (name + time.strftime("%Y%m%d-%H%M%S"))
-    for i in range(1, 1000):
+    base = Path(root) / (name + time.strftime("%Y%m%d-%H%M%S"))
+    for path in [base, *(Path(f"{base}-{i}") for i in range(1, 1000))]:
         try:
             path.mkdir(parents=True)
             return path
-        except FileExistsError:  # another run started this second
-            path = Path(f"{base}-{i}")
+        except FileExistsError:  # another run started this second: the next name
+            continue
         except OSError as e:
             raise UserError(f"cannot create run folder {path}: {e.strerror}") from None
 
@@ -299,20 +272,25 @@ def append_csv(path, row):
         if new: writer.writeheader()
         writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
 
-def save_checkpoint(obj, path):
-    """torch.save to a .tmp, flushed to disk, renamed: no half file nor .tmp, Ctrl-C or not."""
+@contextlib.contextmanager
+def written_whole(path):
+    """Yield a path to write, then rename it to `path`: no half file nor .tmp, Ctrl-C or not."""
     tmp = Path(f"{path}.tmp")
     with ctrl_c_deferred():
         try:
-            with open(tmp, "wb") as f:
-                torch.save(obj, f)
-                f.flush()
-                os.fsync(f.fileno())
+            yield tmp
             os.replace(tmp, path)
-        except OSError as e:  # e.g. the disk is full
+        except OSError as e:
             raise UserError(f"cannot write {path}: {e.strerror or e}") from None
         finally:
             tmp.unlink(missing_ok=True)
+
+def save_checkpoint(obj, path):
+    """torch.save, flushed to disk, through written_whole."""
+    with written_whole(path) as tmp, open(tmp, "wb") as f:
+        torch.save(obj, f)
+        f.flush()
+        os.fsync(f.fileno())
 
 def load_checkpoint(path, required=(), script=None):
     """torch.load(weights_only=True), or one clear UserError; a run folder means its model.pt.
@@ -325,9 +303,9 @@ def load_checkpoint(path, required=(), script=None):
         raise UserError(f"cannot read {path}: truncated, corrupt or not a checkpoint of these "
                         "scripts") from None
     if script and isinstance(ckpt, dict) and ckpt.get("script") != script:
-        saved_by = (f"a model of {ckpt['script']}.py" if "script" in ckpt else
-                    "from an older version that did not record its script: train it again")
-        raise UserError(f"{path} is not a model of {script}.py: it is {saved_by}")
+        raise UserError(f"{path} is not a model of {script}.py: it is " + (
+            f"a model of {ckpt['script']}.py" if "script" in ckpt else
+            "from an older version that did not record its script: train it again"))
     if not isinstance(ckpt, dict) or not set(required) <= set(ckpt):
         raise UserError(f"{path} is not a checkpoint of this script (it lacks {set(required)})")
     return ckpt
@@ -340,16 +318,9 @@ def load_weights(module, state_dict, path):
         raise UserError(f"{path} does not fit this script's {type(module).__name__}: "
                         f"{str(e).splitlines()[0]}") from None
 
-def pick_device(cuda):
-    """The GPU if `cuda` and torch sees one; else the CPU, saying so when the GPU was asked for."""
-    if cuda and not torch.cuda.is_available():
-        print("warning: --cuda, but torch sees no GPU here (a CPU-only torch, or no driver): "
-              "running on the CPU", file=sys.stderr, flush=True)
-    return torch.device("cuda" if cuda and torch.cuda.is_available() else "cpu")
-
 def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
-    """nan or inf in `losses` (name -> number), in the weights of `nets` or in their output for
-    `obs`: training diverged. Remove `run_dir`; raise one UserError naming step and likely cause."""
+    """nan or inf in `losses` (name -> number), or in the weights of `nets` or their output for
+    `obs`: remove `run_dir`, raise one UserError naming the step and the likely cause."""
     bad = [name for name, value in losses.items() if not np.isfinite(float(value))]
     for net in nets:
         tensors = list(net.parameters())

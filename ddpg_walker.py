@@ -51,6 +51,8 @@ import torch.nn.functional as F
 
 import plots
 
+SCRIPT = Path(__file__).stem  # this script's name, saved in its models: it loads no other's
+
 
 # =============================================================================
 # Networks
@@ -456,7 +458,7 @@ def progress_line(step, cfg, episodes, losses, timer):
 def save_model(path, actor, cfg, step):
     """The actor and what --eval needs to rebuild it (small; checkpoint.pt has the rest)."""
     common.save_checkpoint(dict(
-        script="ddpg_walker", actor=actor.state_dict(), config=asdict(cfg), global_step=step,
+        script=SCRIPT, actor=actor.state_dict(), config=asdict(cfg), global_step=step,
         obs_dim=actor.l1.in_features, act_dim=actor.l3.out_features,
         low=(actor.bias - actor.scale).tolist(), high=(actor.bias + actor.scale).tolist()), path)
 
@@ -471,7 +473,7 @@ def save_checkpoint(run, step, obs):
     buffer, filled = run.buffer, slice(0, run.buffer.count)  # only the filled part: compact
     started, path = time.time(), run.dir / "checkpoint.pt"
     common.save_checkpoint(dict(
-        script="ddpg_walker", config=asdict(run.cfg), global_step=step, obs=torch.as_tensor(obs),
+        script=SCRIPT, config=asdict(run.cfg), global_step=step, obs=torch.as_tensor(obs),
         **{key: net.state_dict() for key, net in zip(NETS, run.nets)},
         buffer={key: getattr(buffer, key)[filled].cpu().clone() for key in BUFFER},
         buffer_ptr=buffer.ptr, buffer_count=buffer.count,
@@ -487,7 +489,7 @@ def load_checkpoint(run):
     """Put back what save_checkpoint saved; return the loop's (global_step, obs)."""
     path = run.dir / "checkpoint.pt"
     ckpt = common.load_checkpoint(path, required=NETS + ("buffer", "env", "torch_rng", "obs"),
-                                  script="ddpg_walker")
+                                  script=SCRIPT)
     for key, obj in zip(NETS, run.nets):
         common.load_weights(obj, ckpt[key], path)
     buffer, n = run.buffer, ckpt["buffer_count"]
@@ -542,7 +544,7 @@ def config_to_resume(cfg):
     """The saved run's Config, with the flags of MAY_CHANGE_ON_RESUME that this command set.
     A learning setting set to something else than the saved run's is refused."""
     path = Path(cfg.resume) / "checkpoint.pt"
-    saved = common.load_checkpoint(path, required=("config", "global_step"), script="ddpg_walker")
+    saved = common.load_checkpoint(path, required=("config", "global_step"), script=SCRIPT)
     defaults = {f.name: f.default for f in dataclasses.fields(Config)}
     kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}
     for name, value in asdict(cfg).items():
@@ -683,7 +685,7 @@ def play(cfg: Config):
     of the saved actor without noise (in a window with --watch), or with --gif write one
     episode to a GIF file."""
     ckpt = common.load_checkpoint(cfg.eval, required=("actor", "obs_dim", "act_dim", "low",
-                                                      "high", "config"), script="ddpg_walker")
+                                                      "high", "config"), script=SCRIPT)
     actor = Actor(ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"],
                   np.array(ckpt["low"]), np.array(ckpt["high"]))
     common.load_weights(actor, ckpt["actor"], cfg.eval)

@@ -32,6 +32,7 @@ import copy
 import dataclasses
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -39,6 +40,8 @@ import torch.nn as nn
 from torch.distributions import Categorical
 
 import plots
+
+SCRIPT = Path(__file__).stem  # this script's name, saved in its models: it loads no other's
 
 
 # =============================================================================
@@ -187,9 +190,9 @@ class Config:
         common.check_ranges(
             self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", update_epochs="> 0",
             num_minibatches="> 0", hidden="> 0", print_every="> 0", eval_episodes="> 0",
-            threads="> 0", learning_rate="> 0", reward_scale="> 0", clip_coef="> 0",
-            kl_stop_factor="> 0", ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0",
-            gamma="(0, 1]", lam="[0, 1]", target_kl="> 0 or none")
+            threads="> 0", learning_rate="> 0", reward_scale="> 0", ent_coef=">= 0", vf_coef=">= 0",
+            max_grad_norm=">= 0", gamma="(0, 1]", lam="[0, 1]",
+            clip_coef="> 0", kl_stop_factor="> 0", target_kl="> 0 or none")
         batch = self.num_envs * self.num_steps
         common.check(self.num_minibatches <= batch,
                      f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({batch})")
@@ -265,7 +268,8 @@ def ppo_update(policy, value_net, optimizer, data, cfg):
     dict of obs, act, logp (log pi_old(a|s)), adv and ret, each with one row per transition.
     Returns the update's stats for the log, averaged over its minibatch steps."""
     params = [*policy.parameters(), *value_net.parameters()]
-    stats, policy_stopped = [], False
+    stats = []
+    policy_stopped = False  # tutorial 002's early stop: once set, for the rest of this update
     for epoch in range(cfg.update_epochs):
         # num_minibatches random minibatches that together hold every transition once.
         order = torch.randperm(len(data["obs"]), device=data["obs"].device)
@@ -341,7 +345,7 @@ def train(cfg: Config):
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
-    device = common.pick_device(cfg.cuda)  # --cuda without a GPU: one line, then the CPU
+    device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
     envs, next_obs, threshold = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed,
                                                     cfg.solved_return)
     obs_dim = int(envs.single_observation_space.shape[0])
@@ -432,8 +436,9 @@ def train(cfg: Config):
             # --- pi_old and V of the whole rollout in one batch, then advantages ---
             rollout = buffer.get_batch(device)  # (T, N, ...) tensors
             with torch.no_grad():
-                # log pi_old(a|s): the policy has not changed since it chose these actions.
-                logp_old = Categorical(logits=policy(rollout["obs"])).log_prob(rollout["actions"])
+                # pi_old: the policy has not changed since it chose these actions.
+                dist_old = Categorical(logits=policy(rollout["obs"]))
+                logp_old = dist_old.log_prob(rollout["actions"])  # log pi_old(a|s), (T, N)
                 values = value_net(rollout["obs"])  # (T, N)
                 # V(s_{t+1}) is the value of the next stored obs. After a done step that obs is
                 # the episode's real final observation (the reset step reports it), so a
@@ -455,9 +460,8 @@ def train(cfg: Config):
                 obs=rollout["obs"], act=rollout["actions"], logp=logp_old, adv=advantages,
                 ret=returns).items()}
             stats = ppo_update(policy, value_net, optimizer, data, cfg)
-            # --- nan or inf in the losses, weights or outputs: one line, no run folder; log ---
             common.stop_if_diverged(global_step, stats, (policy, value_net), run_dir, obs=next_obs)
-            log(stats, line=update % cfg.print_every == 0 or update == 1)
+            log(stats, line=update % cfg.print_every == 0 or update == 1)  # CSV, progress line
     except KeyboardInterrupt:
         interrupted = True
     except (ValueError, RuntimeError):  # e.g. Categorical refusing nan logits: diverged?
@@ -470,7 +474,7 @@ def train(cfg: Config):
             for step, ep_return in episodes:
                 common.append_csv(run_dir / "episodes.csv",
                                   {"global_step": step, "return": ep_return})
-            common.save_checkpoint(dict(script="ppo_cartpole", policy=policy.state_dict(),
+            common.save_checkpoint(dict(script=SCRIPT, policy=policy.state_dict(),
                                         value=value_net.state_dict(), config=asdict(cfg),
                                         obs_dim=obs_dim, n_actions=n_actions,
                                         global_step=global_step), run_dir / "model.pt")
@@ -484,7 +488,7 @@ def train(cfg: Config):
                 plots.draw_run(run_dir, threshold, solved_step)
         print(f"\ninterrupted at step {global_step}: {run_dir} holds "
               f"{', '.join(sorted(f.name for f in run_dir.iterdir()))} "
-              f"(replay: python ppo_cartpole.py --eval {run_dir})", flush=True)
+              f"(replay: python {SCRIPT}.py --eval {run_dir})", flush=True)
         return result
     elapsed = time.time() - start_time
     print(f"trained {global_step} steps, {len(episodes)} episodes in {elapsed:.1f}s; "
@@ -521,7 +525,7 @@ def play(cfg: Config):
     """--eval PATH: load a saved model, play cfg.eval_episodes episodes with actions drawn from
     pi (shown with --watch), then as many greedy ones. Returns the first ones' returns.
     With --gif: write one episode, drawn as after.gif is, to that file instead."""
-    ckpt = common.load_checkpoint(cfg.eval, script="ppo_cartpole",
+    ckpt = common.load_checkpoint(cfg.eval, script=SCRIPT,
                                   required=("policy", "obs_dim", "n_actions", "config"))
     policy = PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
     common.load_weights(policy, ckpt["policy"], cfg.eval)

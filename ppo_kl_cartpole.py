@@ -37,6 +37,7 @@ import copy
 import dataclasses
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -44,6 +45,8 @@ import torch.nn as nn
 from torch.distributions import Categorical, kl_divergence
 
 import plots
+
+SCRIPT = Path(__file__).stem  # this script's name, saved in its models: it loads no other's
 
 
 # =============================================================================
@@ -193,9 +196,9 @@ class Config:
         common.check_ranges(
             self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", update_epochs="> 0",
             num_minibatches="> 0", hidden="> 0", print_every="> 0", eval_episodes="> 0",
-            threads="> 0", learning_rate="> 0", reward_scale="> 0", d_targ="> 0",
-            beta_init="> 0", ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0",
-            gamma="(0, 1]", lam="[0, 1]", kl_tolerance="> 1", beta_factor="> 1")
+            threads="> 0", learning_rate="> 0", reward_scale="> 0", ent_coef=">= 0", vf_coef=">= 0",
+            max_grad_norm=">= 0", gamma="(0, 1]", lam="[0, 1]",
+            d_targ="> 0", beta_init="> 0", kl_tolerance="> 1", beta_factor="> 1")
         batch = self.num_envs * self.num_steps
         common.check(self.num_minibatches <= batch,
                      f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({batch})")
@@ -345,7 +348,7 @@ def train(cfg: Config):
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
-    device = common.pick_device(cfg.cuda)  # --cuda without a GPU: one line, then the CPU
+    device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
     envs, next_obs, threshold = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed,
                                                     cfg.solved_return)
     obs_dim = int(envs.single_observation_space.shape[0])
@@ -463,9 +466,8 @@ def train(cfg: Config):
             stats = ppo_update(policy, value_net, optimizer, data, beta, cfg)
             stats["beta"] = beta  # the beta this update used
             beta = adapt_beta(beta, stats["kl"], cfg)  # and the one the next update will use
-            # --- nan or inf in the losses, weights or outputs: one line, no run folder; log ---
             common.stop_if_diverged(global_step, stats, (policy, value_net), run_dir, obs=next_obs)
-            log(stats, line=update % cfg.print_every == 0 or update == 1)
+            log(stats, line=update % cfg.print_every == 0 or update == 1)  # CSV, progress line
     except KeyboardInterrupt:
         interrupted = True
     except (ValueError, RuntimeError):  # e.g. Categorical refusing nan logits: diverged?
@@ -478,7 +480,7 @@ def train(cfg: Config):
             for step, ep_return in episodes:
                 common.append_csv(run_dir / "episodes.csv",
                                   {"global_step": step, "return": ep_return})
-            common.save_checkpoint(dict(script="ppo_kl_cartpole", policy=policy.state_dict(),
+            common.save_checkpoint(dict(script=SCRIPT, policy=policy.state_dict(),
                                         value=value_net.state_dict(), config=asdict(cfg),
                                         obs_dim=obs_dim, n_actions=n_actions,
                                         global_step=global_step), run_dir / "model.pt")
@@ -492,7 +494,7 @@ def train(cfg: Config):
                 plots.draw_run(run_dir, threshold, solved_step)
         print(f"\ninterrupted at step {global_step}: {run_dir} holds "
               f"{', '.join(sorted(f.name for f in run_dir.iterdir()))} "
-              f"(replay: python ppo_kl_cartpole.py --eval {run_dir})", flush=True)
+              f"(replay: python {SCRIPT}.py --eval {run_dir})", flush=True)
         return result
     elapsed = time.time() - start_time
     print(f"trained {global_step} steps, {len(episodes)} episodes in {elapsed:.1f}s; "
@@ -529,7 +531,7 @@ def play(cfg: Config):
     """--eval PATH: load a saved model, play cfg.eval_episodes episodes with actions drawn from
     pi (shown with --watch), then as many greedy ones. Returns the first ones' returns.
     With --gif: write one episode, drawn as after.gif is, to that file instead."""
-    ckpt = common.load_checkpoint(cfg.eval, script="ppo_kl_cartpole",
+    ckpt = common.load_checkpoint(cfg.eval, script=SCRIPT,
                                   required=("policy", "obs_dim", "n_actions", "config"))
     policy = PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])
     common.load_weights(policy, ckpt["policy"], cfg.eval)

@@ -1,6 +1,7 @@
 """Unit tests of common.py: each helper against a brute-force reference."""
 
 import dataclasses
+import re
 import subprocess
 import sys
 import textwrap
@@ -130,6 +131,44 @@ def test_truncation_in_a_real_vector_env_rollout():
     np.testing.assert_allclose(got.numpy(), brute_gae(r, values, next_values, term, trunc, 0.99, 0.95), atol=1e-10)
     # The truncated step's advantage uses V(final obs) = next_values[4] = v[5], not 0.
     assert got[4, 0].item() == pytest.approx(1 + 0.99 * v[5, 0] - v[4, 0])
+
+
+def test_finished_episodes_match_hand_kept_returns():
+    """600 steps of 4 CartPoles with random actions: the (step, return) pairs and the solved flag
+    equal per-env sums kept by hand, where the NEXT_STEP reset step belongs to no episode."""
+    envs, _, threshold = common.make_vec_env("CartPole-v1", 4, seed=0)
+    assert threshold == 475.0
+    rng, episodes, by_hand = np.random.default_rng(0), [], []
+    running, reset_step, flags = np.zeros(4), np.zeros(4, dtype=bool), set()
+    for step in range(1, 601):
+        _, reward, term, trunc, info = envs.step(rng.integers(0, 2, size=4))
+        running += np.where(reset_step, 0.0, reward)
+        for n in np.flatnonzero(term | trunc):
+            by_hand.append((step, running[n]))
+            running[n] = 0.0
+        reset_step = term | trunc
+        ended, solved = common.finished_episodes(info, step, episodes, threshold=22.0, window=5)
+        episodes += ended
+        last = [r for _, r in by_hand[-5:]]
+        assert episodes == by_hand and solved == (len(last) == 5 and np.mean(last) >= 22.0)
+        flags.add(solved)
+    envs.close()
+    assert len(episodes) > 50 and flags == {True, False}  # both answers were checked
+
+
+@pytest.mark.parametrize("rule,good,bad", [("> 0", [1e-9, 5], [0, -1]), (">= 0", [0, 2], [-1e-9]),
+                                           ("> 1", [1.5], [1, 0]), ("(0, 1]", [1, 0.5], [0, 1.01]),
+                                           ("[0, 1]", [0, 1], [-0.1, 1.1]),
+                                           ("> 0 or none", [None, 3], [0])])
+def test_check_ranges_accepts_inside_and_names_the_flag_outside(rule, good, bad):
+    words = {"> 0": "positive", "(0, 1]": "in (0, 1]", "[0, 1]": "in [0, 1]"}
+    for value in good:
+        common.check_ranges(dataclasses.make_dataclass("C", ["target_kl"])(value), target_kl=rule)
+    for value in bad + ([] if "none" in rule else [None]):
+        expected = words.get(rule.removesuffix(" or none"), rule.removesuffix(" or none"))
+        with pytest.raises(ValueError, match=re.escape(f"--target-kl must be {expected}")):
+            common.check_ranges(dataclasses.make_dataclass("C", ["target_kl"])(value),
+                                target_kl=rule)
 
 
 # --- evaluation and GIFs -----------------------------------------------------
@@ -442,12 +481,37 @@ def test_stop_if_diverged(tmp_path):
         common.stop_if_diverged(7, {}, [net])
 
 
-def test_cuda_without_a_gpu_says_so_in_one_line(monkeypatch, capsys):
+@dataclasses.dataclass
+class Device:
+    cuda: bool = False
+    """train on the GPU"""
+    lr: float = 1e-3
+
+    def __post_init__(self):
+        common.check(self.lr > 0, f"--lr must be positive, got {self.lr}")
+
+
+@dataclasses.dataclass
+class GpuFirst:
+    cuda: bool = True
+    """train on the GPU if there is one"""
+
+
+def test_cuda_asked_for_without_a_gpu_says_so_in_one_line(monkeypatch, capsys):
     monkeypatch.setattr(common.torch.cuda, "is_available", lambda: False)
-    assert common.pick_device(True) == torch.device("cpu")
-    assert common.pick_device(False) == torch.device("cpu")
+    assert common.parse_config(Device, ["--cuda"]).cuda
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "torch sees no GPU" in err and "running on the CPU" in err
+    with pytest.raises(SystemExit):  # bad input: its one error line, and no warning beside it
+        common.parse_config(Device, ["--cuda", "--lr", "0"])
+    assert capsys.readouterr().err.count("\n") == 1
+    common.parse_config(Device, [])  # not asked for: nothing to say
+    common.parse_config(GpuFirst, [])  # the GPU when there is one (DDPG's default): no warning
+    common.parse_config(GpuFirst, ["--cuda"])
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(common.torch.cuda, "is_available", lambda: True)
+    common.parse_config(Device, ["--cuda"])
+    assert capsys.readouterr().err == ""
 
 
 def test_load_weights_mismatch_is_a_user_error():
