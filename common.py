@@ -172,8 +172,9 @@ def env_errors(env_id):
         raise UserError(f"not enough memory for {env_id} (too many envs or steps?)") from None
 
 def make_vec_env(env_id, num_envs, seed, solved_return=None):
-    """gym.make_vec of a Discrete-action env, reset with `seed`, autoreset NEXT_STEP (gymnasium
-    1.x's default), ended episodes in info["episode"] -> (envs, obs, the solved return)."""
+    """gym.make_vec of a Discrete-action env reset with `seed` (autoreset NEXT_STEP, gymnasium
+    1.x's default; ended episodes in info["episode"]) -> envs, obs, solved_return or the env's
+    reward_threshold."""
     with env_errors(env_id):
         envs = gym.wrappers.vector.RecordEpisodeStatistics(gym.make_vec(env_id, num_envs))
         assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP

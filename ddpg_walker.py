@@ -169,8 +169,8 @@ class Config:
     cuda: bool = True
     """train on the GPU when there is one"""
     threads: int = 1
-    """torch CPU threads (1-4). 1 never fights another busy program for a core; the README
-    measures what more threads give on an idle machine"""
+    """torch CPU threads (1-4). 1 never fights another busy program for a core
+    (benchmarks/bench_ddpg.py --threads-table measures 1 against 2)"""
 
     def __post_init__(self):
         common.check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
@@ -726,8 +726,8 @@ def main(argv=None):
             play(cfg)
             return
         result = train(cfg)  # on Ctrl-C it saves a checkpoint and the logs, says so, and returns
-        if result["interrupted"]:
-            raise KeyboardInterrupt
+        if result["interrupted"]:  # it said where everything is: exit 130 without another line
+            raise SystemExit(130)
         if cfg.watch:
             play(dataclasses.replace(cfg, eval=str(result["run_dir"])))
 

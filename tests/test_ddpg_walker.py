@@ -330,7 +330,7 @@ def test_ctrl_c_saves_a_checkpoint_at_the_step_it_stopped_and_resume_is_the_unbr
     code, out, err = interrupt("ddpg_walker.py", *pendulum_flags(), "--run-dir", tmp_path,
                                after="step     1100")
     assert code == 130, err
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+    assert err.strip() == "", err  # the one line saying where everything is goes to stdout
     (run,) = tmp_path.iterdir()
     stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
     assert 1100 <= stopped < 2400 and stopped % 800  # where Ctrl-C came, not a periodic checkpoint
