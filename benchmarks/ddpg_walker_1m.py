@@ -84,10 +84,18 @@ def status(parent):
             continue
         out = RESULTS / f"seed{seed}"
         out.mkdir(parents=True, exist_ok=True)
-        shutil.copy(run / "evaluations.csv", out / "evaluations.csv")
+        new, old = (run / "evaluations.csv").read_text(), ""
+        if (out / "evaluations.csv").exists():
+            old = (out / "evaluations.csv").read_text()
+        note = ""
+        if len(new) >= len(old):
+            shutil.copy(run / "evaluations.csv", out / "evaluations.csv")
+        else:  # a rerun (e.g. on a new machine) behind the copy: keep the longer record
+            note = (f"; kept the longer copy (this run is at step {read(run / 'evaluations.csv')[-1][0]}"
+                    f", {'the same rows so far' if old.startswith(new) else 'OTHER rows: another machine?'})")
         rows = read(out / "evaluations.csv")
         print(f"seed {seed}: evaluated up to step {rows[-1][0]}, checkpoint at {saved_step(run)}"
-              f"{', running' if running(parent, seed) else ''}; last 10: {last10(rows):.0f}")
+              f"{', running' if running(parent, seed) else ''}; last 10: {last10(rows):.0f}{note}")
 
 
 def read(path):
