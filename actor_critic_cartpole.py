@@ -15,7 +15,7 @@ where PPO takes many behind its clip. The loop, top to bottom:
     update   one gradient step on -log pi(a|s) * A + c_v * (R - V)^2 / 2 - c_e * entropy
     log      one progress.csv row per update; a progress line now and then
 
-    python actor_critic_cartpole.py                  # train until solved, a few seconds on a CPU
+    python actor_critic_cartpole.py                  # train until solved (seconds to minutes)
     python actor_critic_cartpole.py --help           # every hyperparameter, with its meaning
     python actor_critic_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
@@ -369,7 +369,7 @@ def train(cfg: Config):
             for t in range(T):
                 # obs = next_obs: the trap of every hand-written loop. The action (and its
                 # value) belong to obs; next_obs is only where they led.
-                obs = next_obs
+                obs = next_obs  # as the env gives it: no normalization (a simplification)
                 with torch.no_grad():
                     logits, _ = model(torch.as_tensor(obs, dtype=torch.float32, device=device))
                 action = Categorical(logits=logits).sample().cpu().numpy()  # a ~ pi(.|s), (N,)

@@ -168,6 +168,10 @@ def env_errors(env_id):
         raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
     except gym.error.Error as e:  # NameNotFound, VersionNotFound, ...
         raise UserError(f"unknown environment {env_id!r}: {e}") from None
+    except AttributeError as e:  # MuJoCo's import with MUJOCO_GL=egl finds no libEGL
+        if "egl" not in str(e).lower(): raise
+        raise UserError(f"{env_id}: MuJoCo cannot render without the EGL library (install libegl1, "
+                        "or set MUJOCO_GL=osmesa with OSMesa installed)") from None
     except MemoryError:
         raise UserError(f"not enough memory for {env_id} (too many envs or steps?)") from None
 

@@ -578,7 +578,7 @@ def train(cfg: Config):
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     torch.manual_seed(cfg.seed)  # the networks' init
     device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
-    env = make_continuous_env(cfg.env_id)
+    env = make_continuous_env(cfg.env_id)  # one env, as in the paper and tutorial 003
     obs_dim, act_dim = int(env.observation_space.shape[0]), int(env.action_space.shape[0])
     low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
     nets = build(obs_dim, act_dim, low, high, cfg, device)

@@ -9,7 +9,7 @@ early stop at 1.5 x target_kl). The loop, top to bottom:
     update   a few epochs of shuffled minibatches on the clipped surrogate
     log      one progress.csv row per update; a progress line now and then
 
-    python ppo_cartpole.py                  # train until solved, a few seconds on a CPU
+    python ppo_cartpole.py                  # train until solved (seconds to minutes)
     python ppo_cartpole.py --help           # every hyperparameter, with its meaning
     python ppo_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
@@ -260,7 +260,7 @@ def approx_kl(policy, data, cfg):
 def compute_loss_v(value_net, data):
     """L_VF = E[(V(s_t) - R_t)^2]  (Schulman et al. 2017, eq. 9), halved as is usual."""
     obs, ret = data["obs"], data["ret"]
-    return 0.5 * ((value_net(obs) - ret) ** 2).mean()
+    return 0.5 * ((value_net(obs) - ret) ** 2).mean()  # unclipped: a simplification
 
 
 def ppo_update(policy, value_net, optimizer, data, cfg):
@@ -416,7 +416,7 @@ def train(cfg: Config):
             for t in range(T):
                 # obs = next_obs: the trap of every hand-written loop. The action (and its
                 # value) belong to obs; next_obs is only where they led.
-                obs = next_obs
+                obs = next_obs  # as the env gives it: no normalization (a simplification)
                 with torch.no_grad():
                     logits = policy(torch.as_tensor(obs, dtype=torch.float32, device=device))
                 action = Categorical(logits=logits).sample().cpu().numpy()  # a ~ pi(.|s), (N,)

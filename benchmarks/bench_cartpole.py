@@ -30,8 +30,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PY = sys.executable
-# Each runner: the command for one seed. Our scripts skip only the GIFs, which
-# are drawn after the solved line and so never count in the timing.
+# Each runner: the command for one seed. Our scripts skip the GIFs and the curve and evaluate
+# one episode: all of it comes after the solved line and never counts in the timing.
 RUNNERS = {
     "ppo_cartpole": lambda seed, out: [PY, str(ROOT / "ppo_cartpole.py"), "--seed", str(seed), "--run-dir", out,
                                        "--no-gifs", "--no-curves", "--eval-episodes", "1"],

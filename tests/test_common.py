@@ -389,6 +389,17 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
     assert tuple(p.stdout.split()) == expected
 
 
+def test_env_errors_names_a_missing_egl_library():
+    """Headless, MUJOCO_GL=egl (common's default there) on a machine without libEGL: importing
+    MuJoCo fails inside PyOpenGL with this AttributeError (seen on a GPU server)."""
+    with pytest.raises(common.UserError, match="Walker2d-v5: MuJoCo cannot render without the EGL"):
+        with common.env_errors("Walker2d-v5"):
+            raise AttributeError("'NoneType' object has no attribute 'eglQueryString'")
+    with pytest.raises(AttributeError, match="no attribute 'step'"):  # any other: a bug, shown
+        with common.env_errors("Walker2d-v5"):
+            raise AttributeError("'NoneType' object has no attribute 'step'")
+
+
 def test_env_errors_knows_a_ctrl_c_from_a_missing_package():
     """A Ctrl-C while gym.make imports MuJoCo arrives as DependencyNotInstalled, from
     ImportError("initialization failed"), from the KeyboardInterrupt: it is a Ctrl-C."""
