@@ -422,3 +422,10 @@ def test_ctrl_c_during_eval(tmp_path):
                                "--eval-episodes", 100_000, after="playing")
     assert code == 130, (out, err)
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+
+
+def test_the_shipped_walker_walks():
+    """docs/ddpg_walker2d.pt, the best actor of the 1M-step Walker2d runs (the README's first
+    DDPG command replays it), still loads and walks: one episode without noise, >= 1000."""
+    (ret,) = ddpg.play(ddpg.Config(eval=str(ROOT / "docs" / "ddpg_walker2d.pt"), eval_episodes=1))
+    assert ret >= 1000, ret
