@@ -61,6 +61,11 @@ def start(parent):
         if step >= BUDGET:
             print(f"seed {seed}: finished ({run})")
             continue
+        committed = RESULTS / f"seed{seed}" / "evaluations.csv"
+        if run is None and committed.exists() and read(committed)[-1][0] >= BUDGET:
+            # e.g. on a new machine: the record is already complete; rerunning would only repeat it
+            print(f"seed {seed}: finished (its record {committed.relative_to(ROOT)} reaches 1M)")
+            continue
         how = ["--resume", str(run)] if step else ["--seed", str(seed), "--run-dir", str(parent)]
         log = open(parent / f"seed{seed}.log", "a")
         # nice: other work on the machine comes first; the runs use what is left.
