@@ -258,7 +258,7 @@ def check_ranges(config, **ranges):
 
 def make_run_dir(root, script, env_id, seed):
     """Create and return <root>/<script>__<env>__seed<k>__<timestamp>[-i]/."""
-    name = f"{Path(script).stem}__{env_id.replace('/', '-')}__seed{seed}__"
+    name = f"{script}__{env_id.replace('/', '-')}__seed{seed}__"
     base = Path(root) / (name + time.strftime("%Y%m%d-%H%M%S"))
     for path in [base, *(Path(f"{base}-{i}") for i in range(1, 1000))]:
         try:

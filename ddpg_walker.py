@@ -51,7 +51,7 @@ import torch.nn.functional as F
 
 import plots
 
-SCRIPT = Path(__file__).stem  # this script's name, saved in its models: it loads no other's
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 
 
 # =============================================================================
@@ -607,7 +607,7 @@ def train(cfg: Config):
         run.timer.update(step=global_step)
         print(f"resumed {run.dir} at step {global_step} of {cfg.total_timesteps}", flush=True)
     else:
-        run.dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
+        run.dir = common.make_run_dir(cfg.run_dir, SCRIPT, cfg.env_id, cfg.seed)
         print(f"run folder: {run.dir}  (device: {device})", flush=True)
     first_step = global_step
 

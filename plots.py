@@ -11,7 +11,9 @@ over the steps where all of them ran.
     python plots.py runs/ddpg_walker__* --out walker.png
 
 matplotlib is imported only here, with its Agg backend (no display needed): by
-DDPG at its first evaluation, by the CartPole scripts after training. Labels are ASCII: not every machine has CJK fonts.
+DDPG at its first evaluation, by the CartPole scripts after training. Labels are ASCII:
+not every machine has CJK fonts.
+
 to_tensorboard(run_dir) writes the same CSV logs as TensorBoard scalars, under
 CleanRL's tag names, so that our runs and CleanRL's overlay in one TensorBoard.
 """

@@ -41,7 +41,7 @@ from torch.distributions import Categorical
 
 import plots
 
-SCRIPT = Path(__file__).stem  # this script's name, saved in its models: it loads no other's
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 
 
 # =============================================================================
@@ -353,7 +353,7 @@ def train(cfg: Config):
     T, N = cfg.num_steps, cfg.num_envs
     with common.env_errors(cfg.env_id):  # too little memory for the buffer: one clear line
         buffer = RolloutBuffer(T, N, obs_dim)
-    run_dir = common.make_run_dir(cfg.run_dir, __file__, cfg.env_id, cfg.seed)
+    run_dir = common.make_run_dir(cfg.run_dir, SCRIPT, cfg.env_id, cfg.seed)
     print(f"run folder: {run_dir}", flush=True)
 
     policy = PolicyNetwork(obs_dim, n_actions, cfg.hidden).to(device)

@@ -84,10 +84,13 @@ def start(parent):
 def status(parent):
     for seed in SEEDS:
         run = run_of(parent, seed)
-        if run is None or not (run / "evaluations.csv").exists():
-            print(f"seed {seed}: no evaluations yet")
-            continue
         out = RESULTS / f"seed{seed}"
+        if run is None or not (run / "evaluations.csv").exists():
+            rows = read(out / "evaluations.csv") if (out / "evaluations.csv").exists() else []
+            print(f"seed {seed}: no evaluations here yet" + (
+                f"; the committed record reaches step {rows[-1][0]}, last 10: {last10(rows):.0f}"
+                if rows else ""))
+            continue
         out.mkdir(parents=True, exist_ok=True)
         new, old = (run / "evaluations.csv").read_text(), ""
         if (out / "evaluations.csv").exists():
@@ -96,8 +99,9 @@ def status(parent):
         if len(new) >= len(old):
             shutil.copy(run / "evaluations.csv", out / "evaluations.csv")
         else:  # a rerun (e.g. on a new machine) behind the copy: keep the longer record
-            note = (f"; kept the longer copy (this run is at step {read(run / 'evaluations.csv')[-1][0]}"
-                    f", {'the same rows so far' if old.startswith(new) else 'OTHER rows: another machine?'})")
+            same = "the same rows so far" if old.startswith(new) else "OTHER rows: another machine?"
+            at = read(run / "evaluations.csv")[-1][0]
+            note = f"; kept the longer copy (this run is at step {at}, {same})"
         rows = read(out / "evaluations.csv")
         print(f"seed {seed}: evaluated up to step {rows[-1][0]}, checkpoint at {saved_step(run)}"
               f"{', running' if running(parent, seed) else ''}; last 10: {last10(rows):.0f}{note}")

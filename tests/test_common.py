@@ -282,8 +282,8 @@ def test_help_survives_a_percent_sign(capsys):
 
 
 def test_make_run_dir_names_and_never_reuses(tmp_path):
-    a = common.make_run_dir(tmp_path, "ppo_cartpole.py", "CartPole-v1", 3)
-    b = common.make_run_dir(tmp_path, "ppo_cartpole.py", "CartPole-v1", 3)
+    a = common.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
+    b = common.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
     assert a != b and a.is_dir() and b.is_dir()
     assert a.name.startswith("ppo_cartpole__CartPole-v1__seed3__")
 
@@ -292,7 +292,7 @@ def test_make_run_dir_unwritable_is_a_user_error(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     with pytest.raises(common.UserError, match="cannot create run folder"):
-        common.make_run_dir(blocker / "runs", "x.py", "CartPole-v1", 0)
+        common.make_run_dir(blocker / "runs", "x", "CartPole-v1", 0)
 
 
 def test_append_csv(tmp_path):
