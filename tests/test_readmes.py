@@ -4,6 +4,7 @@ tables still agreeing with the code."""
 
 import dataclasses
 import importlib
+import importlib.util
 import re
 import string
 from pathlib import Path
@@ -169,3 +170,24 @@ def same(shown, default):
         except ValueError:
             return False
     return shown == default
+
+
+def test_readme_ddpg_table_comes_from_the_committed_records(capsys):
+    """The README's DDPG 1M table is what `ddpg_walker_1m.py table` prints from the
+    evaluations.csv files in benchmarks/results/ (no cell typed by hand, none left stale)."""
+    spec = importlib.util.spec_from_file_location("ddpg_1m", ROOT / "benchmarks" / "ddpg_walker_1m.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.table()
+    out = capsys.readouterr().out
+    rows = [line for line in out.splitlines() if line.startswith("| ")]
+    readme = EN.read_text(encoding="utf-8")
+    assert len(rows) == 1 + len(module.SEEDS)
+    for row in rows:
+        assert row in readme.splitlines(), f"the README lacks the table row {row!r}"
+    goal = re.search(r"Goal \(mean over the seeds at 1M >= 2000\): (\d+), (met|not met)", out)
+    said = " ".join(readme.split())  # the goal line may wrap
+    if goal:  # every seed reached 1M: the README says met or not met, with the mean
+        assert f"**{goal[2]}, {goal[1]}**" in said
+    else:
+        assert "**not measured on all three seeds yet**" in said
