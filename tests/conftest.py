@@ -41,3 +41,18 @@ def interrupt(script, *args, after):
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
     return proc.returncode, "".join(seen) + out, err
+
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture(autouse=True, scope="session")
+def no_mujoco_log_left():
+    """MuJoCo writes its warnings (e.g. an unstable simulation from an untrained actor) to
+    MUJOCO_LOG.TXT in the folder it runs in: the repository's, for the scripts the tests
+    start. A file the tests made is removed at the end; one that was there is kept."""
+    log = ROOT / "MUJOCO_LOG.TXT"
+    there = log.exists()
+    yield
+    if not there:
+        log.unlink(missing_ok=True)

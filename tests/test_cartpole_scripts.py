@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 import torch
 
+import plumbing
+
 from conftest import ROOT, ctrl_c_default, interrupt, run_script
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
@@ -106,7 +108,9 @@ def test_eval_reloads_the_saved_model(script, tmp_path):
     result = script.train(small(script, tmp_path, total_timesteps=6000, stop_when_solved=False,
                                 gifs=False, curves=False, eval_episodes=4))
     model = result["run_dir"] / "model.pt"
-    assert script.play(small(script, tmp_path, eval=str(model), eval_episodes=4)) == result["eval_returns"]
+    cfg = small(script, tmp_path, eval=str(model), eval_episodes=4)
+    net, key = (script.ActorCritic, "model") if hasattr(script, "ActorCritic") else (script.PolicyNetwork, "policy")
+    assert plumbing.play(cfg, cfg.eval, script.SCRIPT, net, key) == result["eval_returns"]
     # The run folder stands for its model.pt.
     p = run_script(f"{script.__name__}.py", "--eval", result["run_dir"], "--eval-episodes", 4)
     assert p.returncode == 0, p.stderr

@@ -9,6 +9,7 @@ import pytest
 import torch
 
 import common
+import plumbing
 from conftest import ROOT
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
@@ -56,7 +57,7 @@ def test_a_solved_run_stops_only_once_pi_as_it_is_now_holds(name, tmp_path, monk
         checks.append(step)
         return len(checks) == 3  # the first two checks find pi falling short
 
-    monkeypatch.setattr(script, "holds", holds)
+    monkeypatch.setattr(plumbing, "pi_holds", holds)
     result = script.train(script.Config(run_dir=str(tmp_path), solved_return=30, gifs=False,
                                         curves=False, eval_episodes=1, print_every=10**6))
     assert result["solved"] and len(checks) == 3
@@ -75,6 +76,6 @@ def test_the_check_plays_the_current_pi(name, capsys):
     torch.manual_seed(0)  # an init whose greedy policy falls at once (some balance for 500)
     net = (script.PolicyNetwork(4, 2, cfg.hidden) if hasattr(script, "PolicyNetwork")
            else script.ActorCritic(4, 2, cfg.hidden))
-    assert script.holds(net, "cpu", cfg, 10, step=0)
-    assert not script.holds(net, "cpu", cfg, 475, step=0)
+    assert plumbing.pi_holds(net, "cpu", cfg, 10, step=0)
+    assert not plumbing.pi_holds(net, "cpu", cfg, 475, step=0)
     assert "check at step 0: pi as it is now averages" in capsys.readouterr().out
