@@ -56,3 +56,10 @@ def no_mujoco_log_left():
     yield
     if not there:
         log.unlink(missing_ok=True)
+
+
+def pytest_collection_modifyitems(items):
+    """The worked examples in common.py's docstrings are part of the quick layer."""
+    for item in items:
+        if isinstance(item, pytest.DoctestItem):
+            item.add_marker(pytest.mark.quick)

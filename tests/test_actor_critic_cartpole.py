@@ -9,6 +9,8 @@ import torch
 
 import actor_critic_cartpole as a2c
 
+pytestmark = pytest.mark.quick  # the algorithm's pieces: pytest -m quick runs these
+
 
 def test_targets_are_n_step_returns_across_truncation_and_autoreset():
     """a2c_targets' critic targets are the n-step returns written out by hand: rewards

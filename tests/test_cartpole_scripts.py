@@ -31,6 +31,7 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
+@pytest.mark.quick
 def test_smoke_run_writes_gifs_model_csv_and_curve(script, tmp_path):
     result = script.train(small(script, tmp_path, total_timesteps=2048, stop_when_solved=False,
                                 eval_episodes=2))

@@ -17,6 +17,8 @@ import plumbing
 
 # --- brute-force references: explicit sums, one env column at a time ---------
 
+pytestmark = pytest.mark.quick  # the algorithm's pieces: pytest -m quick runs these
+
 
 def episode_end(terminated, truncated, t):
     """Index of the step that ends the episode containing t (or T-1 if the rollout ends first)."""

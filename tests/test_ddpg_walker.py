@@ -23,6 +23,7 @@ def play(path, episodes):
     return plumbing.play(cfg, cfg.eval, ddpg.SCRIPT, ddpg.Actor, "actor")
 
 
+@pytest.mark.quick
 def test_replay_buffer_wraps_around_and_keeps_the_newest():
     buf = ddpg.ReplayBuffer(obs_dim=3, act_dim=2, max_size=5, device="cpu")
     for i in range(7):
@@ -33,6 +34,7 @@ def test_replay_buffer_wraps_around_and_keeps_the_newest():
     assert buf.obs[0].tolist() == [5.0] * 3 and buf.action[1].tolist() == [-6.0] * 2
 
 
+@pytest.mark.quick
 def test_replay_buffer_sample_shapes_and_fields():
     buf = ddpg.ReplayBuffer(obs_dim=4, act_dim=2, max_size=100, device="cpu")
     for i in range(10):
@@ -50,6 +52,7 @@ def test_replay_buffer_sample_shapes_and_fields():
     assert set(i.tolist()) <= set(range(10))
 
 
+@pytest.mark.quick
 def test_truncated_is_not_terminal_in_the_buffer():
     """A time-limit truncation keeps not_done = 1 (bootstrap); only termination zeroes it."""
     buf = ddpg.ReplayBuffer(obs_dim=1, act_dim=1, max_size=4, device="cpu")
@@ -58,6 +61,7 @@ def test_truncated_is_not_terminal_in_the_buffer():
     assert buf.not_done[:2].tolist() == [0.0, 1.0]
 
 
+@pytest.mark.quick
 def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
     """Run the real loop on an env with a 3-step time limit: what the buffer stores as
     terminal must be the env's `terminated`, never its `truncated`."""
@@ -88,6 +92,7 @@ def test_training_loop_stores_truncation_as_not_terminal(monkeypatch, tmp_path):
     assert any(trunc and not term for term, trunc in flags)  # time limits happened and were stored as not terminal
 
 
+@pytest.mark.quick
 def test_soft_update_matches_hand_computation():
     source, target = torch.nn.Linear(3, 2), torch.nn.Linear(3, 2)
     w_s, w_t = source.weight.detach().clone(), target.weight.detach().clone()
@@ -98,6 +103,7 @@ def test_soft_update_matches_hand_computation():
     torch.testing.assert_close(source.weight, w_s)  # the source is untouched
 
 
+@pytest.mark.quick
 def test_td_target_by_hand():
     """y = r + gamma * not_done * Q'(s', mu'(s')): no future after a termination."""
     y = ddpg.td_target(torch.tensor([1.0, 1.0, -2.0]), torch.tensor([1.0, 0.0, 1.0]),
@@ -105,6 +111,7 @@ def test_td_target_by_hand():
     assert y.tolist() == pytest.approx([1 + 0.9 * 10, 1.0, -2 + 0.9 * 4])
 
 
+@pytest.mark.quick
 def test_actor_loss_is_minus_q_and_its_step_raises_q():
     torch.manual_seed(0)
     actor = ddpg.Actor(3, 2, 16, np.full(2, -1.0), np.full(2, 1.0))
@@ -121,6 +128,7 @@ def test_actor_loss_is_minus_q_and_its_step_raises_q():
     assert critic(obs, actor(obs)).mean().item() > q_before + 1e-3
 
 
+@pytest.mark.quick
 def test_ddpg_update_by_hand_the_target_networks_give_the_td_target():
     """One update on a fixed batch: the critic's loss is the MSE to y = r + gamma * not_done *
     Q'(s', mu'(s')) with the TARGET networks (here made different from the online ones)."""
@@ -177,6 +185,7 @@ def test_watch_window_follows_the_agent():
     assert kw["type"] == mujoco.mjtCamera.mjCAMERA_TRACKING and kw["distance"] == 4.0
 
 
+@pytest.mark.quick
 def test_critic_takes_the_action_at_its_second_layer():
     critic = ddpg.Critic(obs_dim=17, act_dim=6, hidden=32)
     assert critic.l1.in_features == 17 and critic.l2.in_features == 32 + 6
@@ -209,6 +218,20 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
     # --eval replays the saved actor: same returns as the last evaluation.
     returns = play(str(run / "model.pt"), 2)
     assert np.mean(returns) == pytest.approx(result["evaluations"][-1][1])
+
+
+@pytest.mark.quick
+def test_quick_smoke_run_writes_its_files_and_replays(tmp_path):
+    """The quick layer's DDPG run: 300 steps on the cheap MuJoCo task, every file written,
+    --eval giving back the last evaluation."""
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
+                              start_steps=200, eval_every=150, eval_episodes=1))
+    run = result["run_dir"]
+    assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",
+                                               "best.gif", "curve.png", "before.gif", "after.gif",
+                                               "checkpoint.pt"}
+    assert [s for s, _, _ in result["evaluations"]] == [150, 300]
+    assert play(run / "model.pt", 1) == [result["evaluations"][-1][1]]
 
 
 @pytest.mark.parametrize("env_id", ["Hopper-v5", "HalfCheetah-v5", "InvertedPendulum-v5"])

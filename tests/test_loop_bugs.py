@@ -21,6 +21,8 @@ from torch.distributions import Categorical
 import actor_critic_cartpole as a2c
 import ppo_cartpole as ppo
 import ppo_kl_cartpole as ppo_kl
+pytestmark = pytest.mark.quick  # the algorithm's pieces: pytest -m quick runs these
+
 
 REAL_MAKE_VEC = gym.make_vec
 CUT = 12  # max_episode_steps: a random CartPole episode often outlives it (truncated)

@@ -28,6 +28,7 @@ def a_run(tmp_path, threshold, **flags):
                         obs_dim=4, n_actions=2)
 
 
+@pytest.mark.quick
 def test_the_runs_episodes_and_solved_step_match_hand_kept_returns(tmp_path):
     """600 steps of 4 CartPoles with random actions: the (step, return) pairs the run keeps,
     and the step it calls solved, equal per-env sums kept by hand, where the NEXT_STEP reset
@@ -56,6 +57,7 @@ def test_the_runs_episodes_and_solved_step_match_hand_kept_returns(tmp_path):
     assert len(by_hand) > 50 and first_solved is not None and first_solved > 20
 
 
+@pytest.mark.quick
 def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path, monkeypatch):
     """log() writes the step, episodes, mean of the last 20, the extra columns, lr, then the
     stats; a stop writes one more row with the stats as nan and the rest as they are now."""
@@ -79,6 +81,7 @@ def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path, monkeypatch
                                            ("> 1", [1.5], [1, 0]), ("(0, 1]", [1, 0.5], [0, 1.01]),
                                            ("[0, 1]", [0, 1], [-0.1, 1.1]),
                                            ("> 0 or none", [None, 3], [0])])
+@pytest.mark.quick
 def test_check_ranges_accepts_inside_and_names_the_flag_outside(rule, good, bad):
     words = {"> 0": "positive", "(0, 1]": "in (0, 1]", "[0, 1]": "in [0, 1]"}
     for value in good:
@@ -110,6 +113,7 @@ class Demo:
         plumbing.check(self.num_envs > 0, f"--num-envs must be positive, got {self.num_envs}")
 
 
+@pytest.mark.quick
 def test_parse_config_flags_and_defaults():
     assert plumbing.parse_config(Demo, []) == Demo()
     cfg = plumbing.parse_config(Demo, ["--num-envs", "8", "--lr", "3e-4", "--no-fast", "--target-kl", "0.02", "--name", "y"])
@@ -123,6 +127,7 @@ def test_parse_config_flags_and_defaults():
                                          (["--lr", "nan"], "--lr must be a finite number, got nan"),
                                          (["--lr=-inf"], "--lr must be a finite number, got -inf"),
                                          (["--target-kl", "inf"], "--target-kl must be a finite")])
+@pytest.mark.quick
 def test_parse_config_rejects_bad_values_with_exit_2(argv, needle, capsys):
     with pytest.raises(SystemExit) as e:
         plumbing.parse_config(Demo, argv)
@@ -131,6 +136,7 @@ def test_parse_config_rejects_bad_values_with_exit_2(argv, needle, capsys):
     assert needle in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.quick
 def test_help_shows_docstrings(capsys):
     with pytest.raises(SystemExit):
         plumbing.parse_config(Demo, ["--help"])
@@ -144,6 +150,7 @@ class Percent:
     """share of the batch, in % of it (50% = half)"""
 
 
+@pytest.mark.quick
 def test_help_survives_a_percent_sign(capsys):
     with pytest.raises(SystemExit) as e:
         plumbing.parse_config(Percent, ["--help"])
@@ -154,6 +161,7 @@ def test_help_survives_a_percent_sign(capsys):
 # --- run folders, CSV, checkpoints, errors -----------------------------------
 
 
+@pytest.mark.quick
 def test_make_run_dir_names_and_never_reuses(tmp_path):
     a = plumbing.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
     b = plumbing.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
@@ -161,6 +169,7 @@ def test_make_run_dir_names_and_never_reuses(tmp_path):
     assert a.name.startswith("ppo_cartpole__CartPole-v1__seed3__")
 
 
+@pytest.mark.quick
 def test_make_run_dir_unwritable_is_a_user_error(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
@@ -168,6 +177,7 @@ def test_make_run_dir_unwritable_is_a_user_error(tmp_path):
         plumbing.make_run_dir(blocker / "runs", "x", "CartPole-v1", 0)
 
 
+@pytest.mark.quick
 def test_append_csv(tmp_path):
     path = tmp_path / "p.csv"
     plumbing.append_csv(path, dict(step=1, loss=0.5))
@@ -175,6 +185,7 @@ def test_append_csv(tmp_path):
     assert path.read_text().splitlines() == ["step,loss", "1,0.5", "2,0.25"]
 
 
+@pytest.mark.quick
 def test_checkpoint_round_trip_and_bad_files(tmp_path):
     path = tmp_path / "m.pt"
     plumbing.save_checkpoint(dict(w=torch.arange(3.0), config=dict(a=1)), path)
@@ -206,6 +217,7 @@ def test_checkpoint_round_trip_and_bad_files(tmp_path):
         plumbing.load_checkpoint(tmp_path / "empty")
 
 
+@pytest.mark.quick
 def test_save_checkpoint_flushes_to_disk_before_the_rename(tmp_path, monkeypatch):
     calls = []
     real_fsync, real_replace = plumbing.os.fsync, plumbing.os.replace
@@ -244,6 +256,7 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
     assert tuple(p.stdout.split()) == expected
 
 
+@pytest.mark.quick
 def test_env_errors_names_a_missing_egl_library():
     """Headless, MUJOCO_GL=egl (common's default there) on a machine without libEGL: importing
     MuJoCo fails inside PyOpenGL with this AttributeError (seen on a GPU server)."""
@@ -255,6 +268,7 @@ def test_env_errors_names_a_missing_egl_library():
             raise AttributeError("'NoneType' object has no attribute 'step'")
 
 
+@pytest.mark.quick
 def test_env_errors_knows_a_ctrl_c_from_a_missing_package():
     """A Ctrl-C while gym.make imports MuJoCo arrives as DependencyNotInstalled, from
     ImportError("initialization failed"), from the KeyboardInterrupt: it is a Ctrl-C."""
@@ -288,6 +302,7 @@ def ctrl_c_raises():
     signal.signal(signal.SIGINT, before)
 
 
+@pytest.mark.quick
 def test_ctrl_c_during_save_checkpoint_waits_for_the_whole_file(tmp_path, monkeypatch,
                                                                 ctrl_c_raises):
     import signal
@@ -306,6 +321,7 @@ def test_ctrl_c_during_save_checkpoint_waits_for_the_whole_file(tmp_path, monkey
     assert [p.name for p in tmp_path.iterdir()] == ["m.pt"]
 
 
+@pytest.mark.quick
 def test_save_checkpoint_that_cannot_write_is_a_user_error_and_leaves_no_tmp(tmp_path,
                                                                              monkeypatch):
     def full(fd):
@@ -317,6 +333,7 @@ def test_save_checkpoint_that_cannot_write_is_a_user_error_and_leaves_no_tmp(tmp
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.quick
 def test_load_checkpoint_refuses_another_scripts_model(tmp_path):
     plumbing.save_checkpoint(dict(script="ppo_cartpole", w=torch.ones(1)), tmp_path / "a.pt")
     plumbing.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "old.pt")
@@ -328,6 +345,7 @@ def test_load_checkpoint_refuses_another_scripts_model(tmp_path):
         plumbing.load_checkpoint(tmp_path / "old.pt", ("w",), script="ppo_cartpole")
 
 
+@pytest.mark.quick
 def test_stop_if_diverged(tmp_path):
     net, run = torch.nn.Linear(2, 1), tmp_path / "run"
     run.mkdir()
@@ -363,6 +381,7 @@ class GpuFirst:
     """train on the GPU if there is one"""
 
 
+@pytest.mark.quick
 def test_cuda_asked_for_without_a_gpu_says_so_in_one_line(monkeypatch, capsys):
     monkeypatch.setattr(plumbing.torch.cuda, "is_available", lambda: False)
     assert plumbing.parse_config(Device, ["--cuda"]).cuda
@@ -380,6 +399,7 @@ def test_cuda_asked_for_without_a_gpu_says_so_in_one_line(monkeypatch, capsys):
     assert capsys.readouterr().err == ""
 
 
+@pytest.mark.quick
 def test_load_weights_mismatch_is_a_user_error():
     small, big = torch.nn.Linear(3, 2), torch.nn.Linear(5, 2)
     plumbing.load_weights(small, torch.nn.Linear(3, 2).state_dict(), "ok.pt")

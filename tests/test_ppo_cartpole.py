@@ -9,6 +9,8 @@ from torch.distributions import Categorical
 
 import ppo_cartpole as ppo
 
+pytestmark = pytest.mark.quick  # the algorithm's pieces: pytest -m quick runs these
+
 
 class FixedPolicy(torch.nn.Module):
     """pi(.|s) from one free logit vector per state: the ratio is set by hand."""
@@ -146,3 +148,39 @@ def test_learning_rate_anneals_linearly_to_zero(tmp_path):
     cfg.anneal_lr = False
     rows = list(csv.DictReader(open(ppo.train(cfg)["run_dir"] / "progress.csv")))
     assert {float(r["lr"]) for r in rows} == {4e-3}
+
+
+def grads_of_the_first_step(update, params, *args):
+    """The gradient the update's first optimizer step uses (the step itself moves nothing)."""
+    opt, seen = torch.optim.SGD(params, lr=0.0), []
+    real_step = opt.step
+
+    def step(*a, **kw):
+        seen.append([p.grad.clone() for p in params])
+        return real_step(*a, **kw)
+    opt.step = step
+    update(*args[:2], opt, *args[2:])
+    return seen[0]
+
+
+@pytest.mark.parametrize("ent_coef,vf_coef", [(0.1, 0.7), (0.0, 0.5)])
+def test_the_update_descends_the_papers_whole_loss_each_coefficient_counting(ent_coef, vf_coef):
+    """ppo_update's step follows the gradient of -L_CLIP + c1 L_VF - c2 S[pi] (eq. 9), computed
+    here by hand: the entropy bonus (c2 > 0, its sign) and c1 each count."""
+    policy, value_net, data = batch(B=40)
+    with torch.no_grad():  # pi moves away from pi_old: some ratios leave the clip range
+        for p in policy.parameters():
+            p.add_(0.5 * torch.randn_like(p))
+    params = [*policy.parameters(), *value_net.parameters()]
+    dist = Categorical(logits=policy(data["obs"]))
+    r, adv = torch.exp(dist.log_prob(data["act"]) - data["logp"]), data["adv"]
+    assert 0 < ((r - 1).abs() > 0.2).float().mean() < 1
+    l_clip = torch.min(r * adv, torch.clamp(r, 0.8, 1.2) * adv).mean()
+    l_vf = 0.5 * ((value_net(data["obs"]) - data["ret"]) ** 2).mean()
+    loss = -l_clip + vf_coef * l_vf - ent_coef * dist.entropy().mean()
+    expected = torch.autograd.grad(loss, params)
+    cfg = ppo.Config(update_epochs=1, num_minibatches=1, norm_adv=False, max_grad_norm=0.0,
+                     ent_coef=ent_coef, vf_coef=vf_coef)
+    seen = grads_of_the_first_step(ppo.ppo_update, params, policy, value_net, data, cfg)
+    for got, want in zip(seen, expected):
+        torch.testing.assert_close(got, want)

@@ -6,6 +6,8 @@ from torch.distributions import Categorical, kl_divergence
 
 import ppo_kl_cartpole as kl
 
+pytestmark = pytest.mark.quick  # the algorithm's pieces: pytest -m quick runs these
+
 
 @pytest.mark.parametrize("d,expected", [
     (0.001, 0.5),    # d < d_targ / 1.5: pi barely moved, halve beta
@@ -66,3 +68,36 @@ def test_beta_and_kl_are_logged(tmp_path):
         d = float(row["kl"])
         expected = prev / 2 if d < 0.01 / 1.5 else prev * 2 if d > 0.015 else prev
         assert cur == pytest.approx(expected, rel=1e-4)
+
+
+@pytest.mark.parametrize("ent_coef,vf_coef,beta", [(0.1, 0.7, 3.0), (0.0, 0.5, 0.5)])
+def test_the_update_descends_the_papers_whole_loss_each_coefficient_counting(ent_coef, vf_coef,
+                                                                           beta):
+    """ppo_update's step follows the gradient of -(E[r A] - beta KL) + c1 L_VF - c2 S[pi]
+    (eqs. 8 and 9), computed here by hand: beta, c1 and c2 (its sign) each count."""
+    from test_ppo_cartpole import grads_of_the_first_step
+
+    torch.manual_seed(0)
+    policy, value_net = kl.PolicyNetwork(4, 2, 8), kl.ValueNetwork(4, 8)
+    obs, act = torch.randn(40, 4), torch.randint(0, 2, (40,))
+    with torch.no_grad():
+        logits_old = policy(obs)
+        for p in policy.parameters():  # pi moves away from pi_old: the KL is not 0
+            p.add_(0.5 * torch.randn_like(p))
+    data = dict(obs=obs, act=act, logp=Categorical(logits=logits_old).log_prob(act),
+                adv=torch.randn(40), ret=torch.randn(40), logits_old=logits_old)
+    params = [*policy.parameters(), *value_net.parameters()]
+    dist = Categorical(logits=policy(obs))
+    r = torch.exp(dist.log_prob(act) - data["logp"])
+    kl_old_new = (torch.softmax(logits_old, -1) * (torch.log_softmax(logits_old, -1)
+                                                   - torch.log_softmax(policy(obs), -1))).sum(-1)
+    assert kl_old_new.mean() > 1e-3
+    l_vf = 0.5 * ((value_net(obs) - data["ret"]) ** 2).mean()
+    loss = (-(r * data["adv"]).mean() + beta * kl_old_new.mean() + vf_coef * l_vf
+            - ent_coef * dist.entropy().mean())
+    expected = torch.autograd.grad(loss, params)
+    cfg = kl.Config(update_epochs=1, num_minibatches=1, norm_adv=False, max_grad_norm=0.0,
+                    ent_coef=ent_coef, vf_coef=vf_coef)
+    seen = grads_of_the_first_step(kl.ppo_update, params, policy, value_net, data, beta, cfg)
+    for got, want in zip(seen, expected):
+        torch.testing.assert_close(got, want)
