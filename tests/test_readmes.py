@@ -1,6 +1,7 @@
 """The two READMEs: the same commands, the Chinese one mostly Chinese, its terms used one
 way, and its code references (`file.py:LINE` `name`), variable names and hyperparameter
-tables still agreeing with the code."""
+tables still agreeing with the code; the English one short, its docs pages there, and the
+DDPG 1M table in docs/results.md the one the committed records give."""
 
 import dataclasses
 import importlib
@@ -11,6 +12,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 EN, ZH = ROOT / "README.md", ROOT / "README.zh-CN.md"
+RESULTS = ROOT / "docs" / "results.md"  # the measured results, the DDPG 1M table among them
 SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py")
 TUTORIAL_TITLES = (
     "PPO近段策略优化玩cartpole游戏",  # 000
@@ -40,13 +42,46 @@ def commands(path):
             if line.split(" ")[0] in ("python", "pip", "pytest", "tensorboard")}
 
 
+def linked_docs():
+    """The docs/*.md pages README.md links to, as paths (they may not exist)."""
+    names = re.findall(r"\]\((docs/[^)#\s]+\.md)(?:#[^)]*)?\)", EN.read_text(encoding="utf-8"))
+    return [ROOT / name for name in dict.fromkeys(names)]
+
+
 def test_both_readmes_show_the_same_commands():
     en, zh = commands(EN), commands(ZH)
     assert en <= zh, f"missing from README.zh-CN.md: {en - zh}"
-    # The Chinese one may add only the PyPI mirror lines a reader in China needs.
-    extra = {line for line in zh - en if "pypi.tuna.tsinghua.edu.cn" not in line}
+    # The Chinese guide is one page, so it also shows commands the English README leaves to
+    # its docs pages; beyond those it may add only the PyPI mirror lines a reader in China needs.
+    docs = set().union(*(commands(page) for page in linked_docs()))
+    extra = {line for line in zh - en - docs if "pypi.tuna.tsinghua.edu.cn" not in line}
     assert not extra, f"commands only in README.zh-CN.md: {extra}"
     assert {"pip install -r requirements.txt", "python ppo_cartpole.py", "pytest"} <= zh
+
+
+def test_readme_is_short_and_its_docs_links_exist():
+    """The README is read in five minutes; what it leaves out is one link away."""
+    lines = EN.read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 210, f"README.md has {len(lines)} lines (at most 210)"
+    pages = linked_docs()
+    assert pages, "README.md links no docs/*.md page"
+    for page in pages:
+        assert page.is_file(), f"README.md links {page.relative_to(ROOT)}, which does not exist"
+    # Every link among them (the README's, each page's to the others and back) resolves,
+    # down to its #section.
+    for source in [EN, *pages]:
+        text = source.read_text(encoding="utf-8")
+        for name, anchor in re.findall(r"\]\(([^)#\s:]+\.md)(?:#([^)]*))?\)", text):
+            target = source.parent / name
+            assert target.is_file(), f"{source.relative_to(ROOT)} links {name}"
+            if anchor:
+                assert anchor in anchors(target), f"{source.relative_to(ROOT)} links {name}#{anchor}"
+
+
+def anchors(path):
+    """The #anchors GitHub gives the headings of a markdown file."""
+    headings = re.findall(r"^#+ (.+)$", "\n".join(split_code(path)[1]), re.MULTILINE)
+    return {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-") for h in headings}
 
 
 def test_zh_readme_is_mostly_chinese():
@@ -173,17 +208,18 @@ def same(shown, default):
 
 
 def test_readme_ddpg_table_comes_from_the_committed_records(capsys):
-    """The README's DDPG 1M table and its summary line are what `ddpg_walker_1m.py table` prints from the
-    evaluations.csv files in benchmarks/results/ (no cell typed by hand, none left stale)."""
+    """The DDPG 1M table in docs/results.md and its summary line are what
+    `ddpg_walker_1m.py table` prints from the evaluations.csv files in benchmarks/results/ (no
+    cell typed by hand, none left stale)."""
     spec = importlib.util.spec_from_file_location("ddpg_1m", ROOT / "benchmarks" / "ddpg_walker_1m.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     module.table()
     out = capsys.readouterr().out
     rows = [line for line in out.splitlines() if line.startswith("| ")]
-    readme = EN.read_text(encoding="utf-8")
+    page = RESULTS.read_text(encoding="utf-8")
     assert len(rows) == 1 + len(module.SEEDS)
     for row in rows:
-        assert row in readme.splitlines(), f"the README lacks the table row {row!r}"
+        assert row in page.splitlines(), f"docs/results.md lacks the table row {row!r}"
     summary = out.strip().splitlines()[-1]  # the mean over the seeds and its standard error
-    assert summary in " ".join(readme.split()), f"the README lacks {summary!r}"
+    assert summary in " ".join(page.split()), f"docs/results.md lacks {summary!r}"
