@@ -123,6 +123,7 @@ class Config(plumbing.CheckpointFlags):
     random warm-up only once, as the untrained baseline (tutorial 003: 5000)"""
 
     def __post_init__(self):
+        plumbing.check_mujoco(self.env_id)  # first: other flags' limits matter less than that
         super().__post_init__()  # the shared flags' checks
         plumbing.check_ranges(
             self, total_timesteps="> 0", batch_size="> 0", hidden="> 0", buffer_size="> 0",

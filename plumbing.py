@@ -286,6 +286,19 @@ RANGES = {"> 0": (lambda v: v > 0, "positive"), ">= 0": (lambda v: v >= 0, ">= 0
           "[0, 1]": (lambda v: 0 <= v <= 1, "in [0, 1]")}
 
 
+def check_mujoco(env_id):
+    """For DDPG's Config, before the other checks: a gymnasium env that is not a MuJoCo one is
+    refused at once (found from its registration; no env is made). Other ids: train() sees."""
+    try:
+        entry = gym.spec(env_id).entry_point
+    except gym.error.Error:
+        return  # unknown: train() says so, with gymnasium's suggestion
+    if isinstance(entry, str) and entry.startswith("gymnasium.envs."):
+        check(entry.startswith("gymnasium.envs.mujoco"),
+              f"{env_id} is not a MuJoCo env; this script trains MuJoCo tasks (Walker2d-v5, "
+              "Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5, ...)")
+
+
 def check_ranges(config, **ranges):
     """For Config.__post_init__: each named field lies in its range (a key of RANGES; "... or
     none" also lets None through), else ValueError. Checks relating two fields stay explicit."""
@@ -353,7 +366,9 @@ def load_checkpoint(path, required=(), script=None):
     With `script` (e.g. "ppo_cartpole"), a checkpoint that names another script is refused."""
     path = Path(path) / "model.pt" if Path(path).is_dir() else Path(path)
     if not path.is_file():
-        where = "" if path.is_absolute() else f" (relative to {Path.cwd()}, where you are)"
+        here = Path(__file__).resolve().parent / path  # e.g. docs/ddpg_walker2d.pt, from elsewhere
+        where = "" if path.is_absolute() else f" (relative to {Path.cwd()}, where you are" + (
+            f"; did you mean {here}?)" if here.exists() else ")")
         raise UserError(f"no checkpoint at {path}{where}")
     try:  # weights_only: tensors and plain values, never arbitrary Python objects
         ckpt = torch.load(path, map_location="cpu", weights_only=True)

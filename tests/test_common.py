@@ -198,3 +198,13 @@ def test_env_errors_are_user_errors():
     envs, obs, solved = common.make_vec_env("CartPole-v1", 2, 0)
     assert solved == 475 and obs.shape == (2, 4)
     assert common.make_vec_env("CartPole-v1", 2, 0, solved_return=100)[2] == 100
+
+
+def test_make_continuous_env_refuses_discrete_actions_and_other_simulators():
+    with pytest.raises(plumbing.UserError, match="needs continuous \\(Box\\) actions"):
+        common.make_continuous_env("CartPole-v1")
+    with pytest.raises(plumbing.UserError, match="is not a MuJoCo env"):
+        common.make_continuous_env("Pendulum-v1")
+    env = common.make_continuous_env("InvertedPendulum-v5")
+    assert env.action_space.shape == (1,)
+    env.close()

@@ -392,7 +392,7 @@ def test_same_seed_same_evaluations(tmp_path):
 
 
 @pytest.mark.parametrize("args,needle", [
-    (["--env-id", "CartPole-v1"], "needs continuous (Box) actions"),
+    (["--env-id", "CartPole-v1"], "is not a MuJoCo env"),
     (["--env-id", "NoSuchEnv-v0"], "unknown environment"),
     (["--tau", "0"], "--tau must be in (0, 1]"),
     (["--start-steps", "0"], "--start-steps must be at least --batch-size"),
