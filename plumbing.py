@@ -739,8 +739,8 @@ class CheckpointedRun:
                   f"from step {first} on, every {self.cfg.eval_every} steps", flush=True)
             shipped = Path(__file__).resolve().parent / "docs" / "ddpg_walker2d.pt"
             if self.cfg.env_id == "Walker2d-v5" and shipped.exists():
-                print(f"meanwhile, a walker trained for 1M steps: python {self.script}.py --eval "
-                      f"{shipped} --gif walker.gif (or --watch, with a display)", flush=True)
+                print(f"meanwhile, a trained walker (a 1M-step run's best actor): python "
+                      f"{self.script}.py --eval {shipped} --gif walker.gif (or --watch)", flush=True)
             return 0, obs
         step, obs = self._load_checkpoint()
         self._rewind_logs()
