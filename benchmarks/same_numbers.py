@@ -3,7 +3,8 @@ git revision and once from the working tree as it is now, and compare the logs t
 (progress.csv, episodes.csv, evaluations.csv) byte for byte.
 
 A change that only moves code around (a refactor, a comment, a rename) must print SAME for
-every file. Runs are serial, on the CPU, with one torch thread: same seed, same machine =>
+every file. A log may gain columns at its end: the old columns must then be the same, value
+for value, and the line names the new ones. Runs are serial, on the CPU, with one torch thread: same seed, same machine =>
 same bytes. A case whose flags one of the two revisions lacks is skipped, with a line.
 
     python benchmarks/same_numbers.py                  # against HEAD (about 20 min on 2 cores)
@@ -58,6 +59,17 @@ def run(tree, script, flags, out):
     return run_dir
 
 
+def same_old_columns(a, b):
+    """(same, new columns): every column of the older log `a` is in `b` with the same values,
+    row for row; columns that only `b` has are new (added, never changed)."""
+    rows_a, rows_b = (list(csv.DictReader(open(path))) for path in (a, b))
+    header_a = list(rows_a[0]) if rows_a else []
+    header_b = list(rows_b[0]) if rows_b else []
+    same = (len(rows_a) == len(rows_b) and header_b[:len(header_a)] == header_a
+            and all(x[k] == y[k] for x, y in zip(rows_a, rows_b) for k in header_a))
+    return same, header_b[len(header_a):]
+
+
 def columns_that_differ(a, b):
     """Which columns of two CSV logs differ: a few words for the DIFFERENT line."""
     rows_a, rows_b = (list(csv.DictReader(open(path))) for path in (a, b))
@@ -99,8 +111,13 @@ def main():
                     if not a.exists() and not b.exists():
                         continue
                     same = a.exists() and b.exists() and filecmp.cmp(a, b, shallow=False)
+                    new = []
+                    if not same and a.exists() and b.exists():  # the same, but for new columns?
+                        same, new = same_old_columns(a, b)
                     differ += not same
                     verdict = "SAME" if same else "DIFFERENT"
+                    if same and new:
+                        verdict += f" (and new columns: {', '.join(new)})"
                     if not same and a.exists() and b.exists():
                         verdict += f" ({columns_that_differ(a, b)})"
                     print(f"{name:28} {log:16} {verdict}", flush=True)
