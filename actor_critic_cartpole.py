@@ -190,7 +190,11 @@ def a2c_loss(model, data, cfg):
     # Entropy bonus H(pi(.|s)) = -sum_a pi log pi (Mnih et al. 2016, section 4): keeps exploring.
     entropy = dist.entropy().mean()
     loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
-    return loss, dict(loss_pi=loss_pi.item(), loss_v=loss_v.item(), entropy=entropy.item())
+    # How well V fits its targets: 1 - Var(R - V) / Var(R) (1: exactly; 0: no better than their
+    # mean); V and R themselves are kept for inside.png.
+    explained = 1 - (ret - values).var() / ret.var().clamp_min(1e-8)
+    return loss, dict(loss_pi=loss_pi.item(), loss_v=loss_v.item(), entropy=entropy.item(),
+                      explained_var=explained.item(), values=values.detach(), ret=ret)
 
 
 # ==== Training ============================================================================
@@ -217,8 +221,8 @@ def train(cfg: Config):
     default_scale = 1 - cfg.gamma if cfg.gamma < 1 else 1.0
     reward_scale = cfg.reward_scale if cfg.reward_scale is not None else default_scale
     # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
-    run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(model=model), model, untrained,
-                       device, obs_dim=obs_dim, n_actions=n_actions)
+    run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(model=model), model, model,
+                       untrained, device, obs_dim=obs_dim, n_actions=n_actions)
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.

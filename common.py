@@ -113,10 +113,12 @@ def deterministic(actor, device):
     return act
 
 
-def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, **make_kw):
+def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, trajectories=None,
+             **make_kw):
     """Returns of `episodes` episodes of `policy` (obs -> action), the env seeded once with
     `seed`. render_mode="human" shows a window (make_kw go to gym.make); log=True prints each
-    return as its episode ends."""
+    return as its episode ends; a list `trajectories` receives each episode's observations,
+    rewards and whether it terminated (rather than hit the time limit)."""
     with plumbing.env_errors(env_id):
         env = gym.make(env_id, render_mode=render_mode, **make_kw)
     returns = []
@@ -126,12 +128,17 @@ def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, **make
         if viewer is not None and render_mode == "human":
             viewer._hide_menu = True  # MuJoCo's window: its menu would cover half the walker
         for episode in range(1, episodes + 1):
-            done, total = False, 0.0
+            done, total, seen, rewards = False, 0.0, [obs], []
             while not done:
                 obs, reward, terminated, truncated, _ = env.step(policy(obs))
                 total += float(reward)
                 done = terminated or truncated
+                seen.append(obs)
+                rewards.append(float(reward))
             returns.append(total)
+            if trajectories is not None:  # the last obs is where the episode ended: not a state
+                trajectories.append(dict(obs=np.array(seen[:-1]), rewards=np.array(rewards),
+                                         terminated=bool(terminated)))
             if log:
                 print(f"episode {episode}/{episodes}: return {total:.1f}  (Ctrl-C stops)",
                       flush=True)
@@ -168,6 +175,64 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
     with plumbing.written_whole(path) as tmp:  # a Ctrl-C waits until the GIF is whole
         imageio.mimsave(tmp, frames, format="GIF", duration=1000 * every / fps, loop=0)
     return total
+
+
+# =============================================================================
+# Inside the algorithms: what an update did to PPO's ratio, and DDPG's overestimation
+# =============================================================================
+
+QUANTILES = {"ratio_q05": 0.05, "ratio_q25": 0.25, "ratio_median": 0.5, "ratio_q75": 0.75,
+             "ratio_q95": 0.95}
+
+
+def ratio_stats(ratio, adv, clip_coef, normalize=True):
+    """The ratio r = pi(a|s) / pi_old(a|s) over a batch after a PPO update: its min, quantiles
+    and max, and zero_grad_frac, the share of samples whose term of L_CLIP has no gradient.
+
+    The clip does not keep r inside [1 - eps, 1 + eps]. min(r A, clip(r) A) only goes flat
+    on the side the advantage favours: for A > 0 once r > 1 + eps, for A < 0 once r < 1 - eps.
+    Such a sample stops pulling pi further; the other samples, and the shared network, still
+    move it. clipfrac counts |r - 1| > eps on both sides, so it is larger. `adv` is normalized
+    over the batch first when the update normalizes it (normalize=True), as its sign decides.
+
+    >>> r, a = torch.tensor([1.5, 1.5, 0.5, 0.5, 1.0]), torch.tensor([1., -1., 1., -1., 1.])
+    >>> ratio_stats(r, a, 0.2, normalize=False)["zero_grad_frac"]  # samples 0 and 3
+    0.4
+    """
+    if normalize:
+        adv = adv - adv.mean()  # the sign after normalization (the std does not change it)
+    flat = ((adv > 0) & (ratio > 1 + clip_coef)) | ((adv < 0) & (ratio < 1 - clip_coef))
+    stats = {key: torch.quantile(ratio, q).item() for key, q in QUANTILES.items()}
+    return dict(ratio_min=ratio.min().item(), **stats, ratio_max=ratio.max().item(),
+                zero_grad_frac=(flat | (adv == 0)).double().mean().item(), ratio=ratio, adv=adv)
+
+
+def q_against_return(trajectories, actor, critic, gamma, device, horizon=500):
+    """DDPG's overestimation (Fujimoto et al. 2018, TD3, Fig. 1): the critic's estimate
+    Q(s, mu(s)) against the discounted return mu really obtained from s, both averaged over
+    the states of evaluation episodes. Returns (mean Q, mean return, number of states).
+
+    Where an episode hit the time limit, its return past the limit is unseen. So only states
+    at least `horizon` steps before that end count: the unseen tail adds at most
+    gamma^horizon * r_max / (1 - gamma) to their return (0.99^500 = 0.0066, times 100 r_max:
+    under r_max; Walker2d's rewards per step are a few units). After a termination the
+    future really is 0 and every state counts."""
+    states, targets = [], []
+    for episode in trajectories:
+        rewards, g = episode["rewards"], 0.0
+        returns = np.zeros(len(rewards))
+        for t in reversed(range(len(rewards))):  # G_t = r_t + gamma * G_{t+1}
+            g = returns[t] = rewards[t] + gamma * g
+        keep = len(rewards) if episode["terminated"] else max(len(rewards) - horizon, 0)
+        states.append(episode["obs"][:keep])
+        targets.append(returns[:keep])
+    states = np.concatenate(states) if states else np.zeros((0, 1))
+    if len(states) == 0:
+        return float("nan"), float("nan"), 0
+    with torch.no_grad():
+        obs = torch.as_tensor(states, dtype=torch.float32, device=device)
+        q = critic(obs, actor(obs))
+    return float(q.mean()), float(np.concatenate(targets).mean()), len(states)
 
 
 # =============================================================================

@@ -294,9 +294,10 @@ def train(cfg: Config):
             # --- evaluate: mu(s) without noise, every eval_every steps (tutorial 003); during
             # the random warm-up only the first time, as the untrained baseline ---
             if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):
+                seen = []  # the evaluation's states and rewards: Q(s, mu(s)) against the return
                 returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
-                                          cfg.eval_episodes, cfg.eval_seed)
-                run.log_evaluation(global_step, returns)  # evaluations.csv, model.pt, curve
+                                          cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
+                run.log_evaluation(global_step, returns, seen)  # evaluations.csv, model.pt, curve
             run.checkpoint_when_due(global_step, obs)  # every checkpoint_every steps
             if run.ctrl_c_pressed:  # stop where the step is whole (its checkpoint is written)
                 break

@@ -118,6 +118,160 @@ def draw_ddpg(plt, evaluations):
     return fig
 
 
+# ==== inside.png: what the updates do ====================================================
+
+
+def draw_inside(run_dir, script, cfg, kept=None, maps=None):
+    """Write run_dir/inside.png, the picture of what the algorithm does inside (see
+    docs/inside.md); returns its path. `cfg`: the run's settings; `kept`: (env step, {name:
+    array}) per update (PPO-clip: the batch's ratios and advantages; A2C: V and its targets);
+    `maps`: {"untrained"/"trained": cartpole map} (V and pi(right|s), CartPole scripts)."""
+    run_dir, plt = Path(run_dir), pyplot()
+    rows = 1 + (script == "ppo_cartpole") + (maps is not None)
+    height = 3.3 * rows  # inches; margins of half an inch above and below
+    fig = plt.figure(figsize=(12, height))
+    grid = fig.add_gridspec(rows, 4, hspace=0.55, wspace=0.45, left=0.06, right=0.97,
+                            top=1 - 0.5 / height, bottom=0.55 / height)
+    if script == "ddpg_walker":
+        overestimation(fig.add_subplot(grid[0, :]), read_csv(run_dir / "evaluations.csv"))
+    else:
+        progress = read_csv(run_dir / "progress.csv")
+        if script == "ppo_cartpole":
+            ratio_panels(fig, grid, progress, kept, cfg["clip_coef"])
+        elif script == "ppo_kl_cartpole":
+            beta_panels(fig, grid, progress, cfg)
+        else:
+            value_fit_panels(fig, grid, progress, kept)
+        if maps is not None:
+            map_panels(fig, grid[rows - 1, :], maps)
+    fig.suptitle(run_dir.name, fontsize=8, y=1 - 0.1 / height)
+    path, tmp = run_dir / "inside.png", Path(f"{run_dir / 'inside.png'}.tmp.png")
+    try:  # written aside, then renamed, as curve.png
+        fig.savefig(tmp, dpi=72)
+        tmp.replace(path)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def three_updates(kept):
+    """An early, a middle and a late update of `kept` (its first, middle and last)."""
+    picks = sorted({0, len(kept) // 2, len(kept) - 1})
+    return [(i + 1, *kept[i]) for i in picks]
+
+
+def ratio_panels(fig, grid, progress, kept, eps):
+    """PPO-clip: the ratio r over updates, with the band [1 - eps, 1 + eps]; the share of
+    samples without gradient beside clipfrac; histograms of r at three updates, by sign of A."""
+    ax = fig.add_subplot(grid[0, :2])
+    x = progress["global_step"]
+    ax.fill_between(x, progress["ratio_min"], progress["ratio_max"], color="C0", alpha=0.15,
+                    label="min to max")
+    ax.fill_between(x, progress["ratio_q05"], progress["ratio_q95"], color="C0", alpha=0.3,
+                    label="5% to 95%")
+    ax.plot(x, progress["ratio_median"], color="C0", lw=1, label="median")
+    for y in (1 - eps, 1 + eps):
+        ax.axhline(y, color="k", ls="--", lw=0.8)
+    ax.set_title(f"r = pi/pi_old after each update; dashed: 1 -+ eps = {eps:g}", fontsize=9)
+    ax.set_xlabel("env steps")
+    ax.legend(fontsize=7, loc="upper right")
+    ax = fig.add_subplot(grid[0, 2:])
+    ax.plot(x, progress["clipfrac"], color="C3", lw=1, label="clipfrac: |r - 1| > eps")
+    ax.plot(x, progress["zero_grad_frac"], color="C2", lw=1,
+            label="no policy gradient (clip binds on A's side)")
+    ax.set_title("share of the batch", fontsize=9)
+    ax.set_xlabel("env steps")
+    ax.legend(fontsize=7)
+    for column, (update, step, arrays) in enumerate(three_updates(kept or [])):
+        ax = fig.add_subplot(grid[1, column])
+        r, adv = arrays["ratio"], arrays["adv"]
+        bins = np.linspace(min(r.min(), 1 - 2 * eps), max(r.max(), 1 + 2 * eps), 40)
+        ax.hist(r[adv > 0], bins=bins, color="C2", alpha=0.6, label="A > 0")
+        ax.hist(r[adv < 0], bins=bins, color="C3", alpha=0.6, label="A < 0")
+        ax.axvspan(1 + eps, bins[-1], color="C2", alpha=0.08)  # A > 0 here: no gradient
+        ax.axvspan(bins[0], 1 - eps, color="C3", alpha=0.08)  # A < 0 here: no gradient
+        for v in (1 - eps, 1 + eps):
+            ax.axvline(v, color="k", ls="--", lw=0.8)
+        ax.set_title(f"update {update} (step {step})", fontsize=8)
+        ax.set_xlabel("r; shaded: no gradient for that colour", fontsize=7)
+        if column == 0:
+            ax.legend(fontsize=7)
+
+
+def beta_panels(fig, grid, progress, cfg):
+    """PPO-penalty: the KL after each update against [d_targ / 1.5, 1.5 d_targ], and beta
+    (log axis), with the updates where it was halved or doubled marked."""
+    x, kl, beta = progress["global_step"], progress["kl"], progress["beta"]
+    lo, hi = cfg["d_targ"] / cfg["kl_tolerance"], cfg["d_targ"] * cfg["kl_tolerance"]
+    ax = fig.add_subplot(grid[0, :2])
+    ax.axhspan(lo, hi, color="C2", alpha=0.2, label="beta stays")
+    ax.plot(x, kl, color="C4", lw=1, label="KL(pi_old || pi) after the update")
+    ax.set_yscale("log")
+    ax.set_title(f"KL against [d_targ / {cfg['kl_tolerance']:g}, d_targ x "
+                 f"{cfg['kl_tolerance']:g}], d_targ = {cfg['d_targ']:g}", fontsize=9)
+    ax.set_xlabel("env steps")
+    ax.legend(fontsize=7)
+    ax = fig.add_subplot(grid[0, 2:])
+    ax.plot(x, beta, color="C1", lw=1, drawstyle="steps-post")
+    nxt = np.append(beta[1:], np.nan)  # the beta the next update uses
+    for changed, marker, what in ((nxt > beta, "^", "doubled (KL too high)"),
+                                  (nxt < beta, "v", "halved (KL too low)")):
+        ax.scatter(x[changed], beta[changed], marker=marker, s=18, label=what)
+    ax.set_yscale("log")
+    ax.set_title("beta, the penalty's weight", fontsize=9)
+    ax.set_xlabel("env steps")
+    ax.legend(fontsize=7)
+
+
+def value_fit_panels(fig, grid, progress, kept):
+    """A2C: how much of its targets' variance V explains, per update; V(s_t) against the
+    n-step return R_t it is trained toward, at three updates."""
+    ax = fig.add_subplot(grid[0, 0])
+    ax.plot(progress["global_step"], progress["explained_var"], color="C0", lw=1)
+    ax.set_ylim(-1, 1.05)
+    ax.set_title("1 - Var(R - V) / Var(R)", fontsize=9)
+    ax.set_xlabel("env steps")
+    for column, (update, step, arrays) in enumerate(three_updates(kept or []), start=1):
+        ax = fig.add_subplot(grid[0, column])
+        ax.scatter(arrays["ret"], arrays["values"], s=3, alpha=0.4)
+        lims = [min(arrays["ret"].min(), arrays["values"].min()),
+                max(arrays["ret"].max(), arrays["values"].max())]
+        ax.plot(lims, lims, color="k", lw=0.8)
+        ax.set_title(f"update {update} (step {step})", fontsize=8)
+        ax.set_xlabel("target R_t", fontsize=8)
+        ax.set_ylabel("V(s_t)", fontsize=8)
+
+
+def map_panels(fig, cell, maps):
+    """V(s) and pi(right|s) over pole angle and angular velocity, untrained and trained."""
+    sub = cell.subgridspec(1, 4, wspace=0.5)
+    for column, (key, when) in enumerate([(k, w) for k in ("value", "right")
+                                          for w in ("untrained", "trained")]):
+        ax, m = fig.add_subplot(sub[0, column]), maps[when]
+        extent = [m["angle"][0], m["angle"][-1], m["velocity"][0], m["velocity"][-1]]
+        image = ax.imshow(m[key], origin="lower", aspect="auto", extent=extent,
+                          cmap="viridis" if key == "value" else "coolwarm",
+                          **({} if key == "value" else dict(vmin=0, vmax=1)))
+        fig.colorbar(image, ax=ax, fraction=0.046)
+        ax.set_title(f"{'V(s)' if key == 'value' else 'pi(right | s)'}, {when}", fontsize=8)
+        ax.set_xlabel("pole angle (rad)", fontsize=7)
+        ax.set_ylabel("angular velocity", fontsize=7)
+
+
+def overestimation(ax, evaluations):
+    """DDPG (TD3 paper, Fig. 1): the critic's Q(s, mu(s)) against the discounted return mu
+    obtained from the same states, at each evaluation."""
+    x = evaluations["global_step"]
+    ax.plot(x, evaluations["q_estimate"], color="C3", lw=1.5, label="critic: Q(s, mu(s))")
+    ax.plot(x, evaluations["discounted_return"], color="C0", lw=1.5,
+            label="what mu obtained: sum of gamma^k r from s")
+    ax.set_title("at each evaluation: the critic's estimate against the discounted return "
+                 "really obtained, over the same states", fontsize=9)
+    ax.set_xlabel("env steps")
+    ax.legend(fontsize=8)
+
+
 # CSV column -> TensorBoard tag (CleanRL's names where CleanRL logs the same thing).
 TAGS = {"return": "charts/episodic_return", "return_mean20": "charts/return_mean20",
         "lr": "charts/learning_rate", "sps": "charts/SPS", "loss_pi": "losses/policy_loss",

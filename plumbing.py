@@ -13,6 +13,7 @@ ends a run only through the one `with run.until_interrupted():` block around the
 import argparse
 import ast
 import contextlib
+import copy
 import csv
 import dataclasses
 import inspect
@@ -403,7 +404,8 @@ def save_model(path, script, cfg, step, nets, **info):
 def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
     """nan or inf in `losses` (name -> number), or in the weights of `nets` or their output for
     `obs`: remove `run_dir`, raise one UserError naming the step and the likely cause."""
-    bad = [name for name, value in losses.items() if not np.isfinite(float(value))]
+    bad = [name for name, value in losses.items()
+           if np.ndim(value) == 0 and not np.isfinite(float(value))]  # arrays: kept for pictures
     for net in nets:
         tensors = list(net.parameters())
         if obs is not None:
@@ -449,6 +451,23 @@ def pi_holds(policy, device, cfg, threshold, step):
     return held
 
 
+def cartpole_maps(policy, value, device, n=41):
+    """V(s) and pi(push right | s) on a grid of pole angle (+-0.21 rad, where an episode ends)
+    and angular velocity (+-2 rad/s), the cart at rest in the middle. `policy` outputs logits
+    (or (logits, V)), `value` V (or (logits, V))."""
+    angle, velocity = np.linspace(-0.21, 0.21, n), np.linspace(-2.0, 2.0, n)
+    a, v = np.meshgrid(angle, velocity)  # rows: velocity, columns: angle
+    obs = np.stack([np.zeros_like(a), np.zeros_like(a), a, v], axis=-1).reshape(-1, 4)
+    with torch.no_grad():
+        x = torch.as_tensor(obs, dtype=torch.float32, device=device)
+        logits, values = policy(x), value(x)
+        logits = logits[0] if isinstance(logits, tuple) else logits
+        values = values[1] if isinstance(values, tuple) else values
+        right = torch.softmax(logits, -1)[:, 1]
+    return dict(angle=angle, velocity=velocity, value=values.reshape(n, n).cpu().numpy(),
+                right=right.reshape(n, n).cpu().numpy())
+
+
 # How the progress line shows each logged number, in this order (the ones a script logs).
 SHOWN = {"running_reward": "6.1f", "loss_pi": "+.3f", "loss_v": ".2e", "approx_kl": ".4f",
          "kl": ".4f", "beta": ".3g", "entropy": ".3f", "clipfrac": ".3f"}
@@ -459,13 +478,15 @@ class Run:
     update (and a progress line now and then), episodes.csv, model.pt, and after training
     curve.png, the evaluation and the GIFs. It keeps the finished episodes for the solved
     check. `nets` (name -> module) are saved in model.pt; `policy` (its output: the logits
-    of pi, or (logits, V)) is what is checked, evaluated and drawn; `untrained` is drawn
-    in before.gif."""
+    of pi, or (logits, V)) is what is checked, evaluated and drawn; `value` (V, or (logits,
+    V)) is mapped in inside.png; `untrained` is drawn in before.gif."""
 
-    def __init__(self, script, cfg, threshold, optimizer, nets, policy, untrained, device,
+    def __init__(self, script, cfg, threshold, optimizer, nets, policy, value, untrained, device,
                  **info):
         self.script, self.cfg, self.threshold, self.optimizer = script, cfg, threshold, optimizer
         self.nets, self.policy, self.untrained, self.device = nets, policy, untrained, device
+        self.value, self.untrained_value = value, copy.deepcopy(value)  # for maps in inside.png
+        self.kept = []  # (env step, {name: array}) of each update, for inside.png
         self.info = info  # what --eval needs to rebuild the networks, e.g. obs_dim
         self.start_time = time.time()
         self.dir = make_run_dir(cfg.run_dir, script, cfg.env_id, cfg.seed)
@@ -515,9 +536,13 @@ class Run:
 
     def log(self, stats, **columns):
         """After an update: its progress.csv row (the step, episodes, mean of the last 20
-        returns, `columns`, the learning rate, then `stats`), and every print_every updates
-        (and after the first) a progress line."""
+        returns, `columns`, the learning rate, then the numbers of `stats`; its arrays, such as
+        the batch's ratios, are kept for inside.png), and every print_every updates (and after
+        the first) a progress line."""
         self.updates += 1
+        arrays = {k: v.detach().cpu().numpy() for k, v in stats.items() if torch.is_tensor(v)}
+        stats = {k: v for k, v in stats.items() if k not in arrays}  # numbers: to progress.csv
+        self.kept.append((self.global_step, arrays))
         self.stats = stats
         self._row(columns, stats)
         if self.updates % self.cfg.print_every == 0 or self.updates == 1:
@@ -554,6 +579,16 @@ class Run:
                 save_model(self.dir / "model.pt", self.script, self.cfg, self.global_step,
                            self.nets, **self.info)
 
+    def draw_inside(self):
+        """inside.png: what the updates did (the kept arrays, progress.csv) and, on CartPole,
+        V(s) and pi(right|s) as maps, untrained and trained."""
+        maps = None
+        if self.cfg.env_id.startswith("CartPole"):
+            maps = {when: cartpole_maps(policy, value, self.device) for when, policy, value in (
+                ("untrained", self.untrained, self.untrained_value),
+                ("trained", self.policy, self.value))}
+        return plots.draw_inside(self.dir, self.script, asdict(self.cfg), self.kept, maps)
+
     def finish(self):
         """After training: curve.png, TensorBoard, two evaluations (actions drawn from pi, and
         pi's most probable action) and the GIFs. Returns train()'s result: run_dir, solved,
@@ -575,9 +610,10 @@ class Run:
         print(f"trained {step} steps, {len(self.episodes)} episodes in {elapsed:.1f}s; "
               f"model: {run_dir / 'model.pt'}", flush=True)
         if cfg.curves:
-            with ctrl_c_deferred():  # Ctrl-C waits until curve.png is whole
+            with ctrl_c_deferred():  # Ctrl-C waits until curve.png and inside.png are whole
                 print(f"curve: {plots.draw_run(run_dir, self.threshold, self.solved_step)}",
                       flush=True)
+                print(f"inside: {self.draw_inside()}", flush=True)
         if cfg.tensorboard:
             plots.to_tensorboard(run_dir, sps=step / elapsed)
         # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
@@ -723,6 +759,7 @@ class CheckpointedRun:
         self.device, self.info = device, info  # info: what --eval needs to rebuild the actor
         self.dir = Path(cfg.resume) if cfg.resume else None
         self.episodes, self.evaluations = [], []  # (step, return); (step, mean, std)
+        self.inside = []  # per evaluation: (mean Q(s, mu(s)), mean discounted return, states)
         now = time.time()
         self.timer = dict(start=now, step=0, time=now, rate=float("nan"))
         self.ctrl_c = CtrlC()
@@ -801,15 +838,18 @@ class CheckpointedRun:
         return (f"step {step:>8}  {speed}  return(10) {recent}{loss_text}  "
                 f"{clock(now - timer['start'])}")
 
-    def log_evaluation(self, step, returns):
-        """An evaluation's row in evaluations.csv; model.pt, and best.pt and best.gif if it is
-        the best so far; curve.png redrawn."""
+    def log_evaluation(self, step, returns, trajectories=()):
+        """An evaluation's row in evaluations.csv, with the critic's Q(s, mu(s)) against the
+        discounted return from the evaluation's states (common.q_against_return); model.pt,
+        and best.pt and best.gif if it is the best so far; curve.png and inside.png redrawn."""
         cfg, actor = self.cfg, self.nets["actor"]
         mean, std = float(np.mean(returns)), float(np.std(returns))
         best = max((m for _, m, _ in self.evaluations), default=-float("inf"))
         self.evaluations.append((step, mean, std))
+        self.inside.append(common.q_against_return(trajectories, actor, self.nets["critic"],
+                                                   cfg.gamma, self.device))
         append_csv(self.dir / "evaluations.csv", evaluation_row(self.evaluations[-1],
-                                                                self.episodes))
+                                                                self.episodes, self.inside[-1]))
         print(f"evaluation at step {step}: {mean:.1f} +- {std:.1f} over {len(returns)} "
               f"episodes", flush=True)
         self._save_actor(self.dir / "model.pt", step)
@@ -820,6 +860,7 @@ class CheckpointedRun:
                                   self.dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
         if cfg.curves:
             plots.draw_run(self.dir)  # rewritten at every evaluation: open it any time
+            plots.draw_inside(self.dir, self.script, asdict(cfg))
         if cfg.tensorboard:
             plots.to_tensorboard(self.dir, sps=self.timer["rate"])
 
@@ -846,7 +887,8 @@ class CheckpointedRun:
             torch_rng=torch.get_rng_state(),  # the exploration noise and the minibatch draws
             cuda_rng=torch.cuda.get_rng_state() if buffer.obs.is_cuda else None,
             action_space_rng=self.env.action_space.np_random.bit_generator.state,  # warm-up
-            env=env_state(self.env), episodes=self.episodes, evaluations=self.evaluations), path)
+            env=env_state(self.env), episodes=self.episodes, evaluations=self.evaluations,
+            inside=self.inside), path)
         print(f"checkpoint at step {step}: {path} ({path.stat().st_size / 2**20:.0f} MB, "
               f"written in {time.time() - started:.1f} s)", flush=True)
 
@@ -868,6 +910,8 @@ class CheckpointedRun:
         self.env.action_space.np_random.bit_generator.state = ckpt["action_space_rng"]
         set_env_state(self.env, ckpt["env"])
         self.episodes[:], self.evaluations[:] = ckpt["episodes"], ckpt["evaluations"]
+        nan = (float("nan"), float("nan"), 0)  # a checkpoint from before Q was logged
+        self.inside[:] = ckpt.get("inside", [nan] * len(self.evaluations))
         return ckpt["global_step"], ckpt["obs"].numpy()
 
     def _rewind_logs(self):
@@ -876,8 +920,8 @@ class CheckpointedRun:
         for stale in self.dir.glob("*.tmp*"):  # a write that a kill cut short
             stale.unlink()
         for name, rows in (("episodes.csv", [episode_row(*e) for e in self.episodes]),
-                           ("evaluations.csv", [evaluation_row(e, self.episodes)
-                                                for e in self.evaluations])):
+                           ("evaluations.csv", [evaluation_row(e, self.episodes, q)
+                                                for e, q in zip(self.evaluations, self.inside)])):
             (self.dir / name).unlink(missing_ok=True)
             for row in rows:
                 append_csv(self.dir / name, row)
@@ -916,12 +960,15 @@ def episode_row(step, ep_return):
     return {"global_step": step, "return": ep_return}
 
 
-def evaluation_row(evaluation, episodes):
-    """An evaluations.csv row: the evaluation and the training return before it."""
+def evaluation_row(evaluation, episodes, inside):
+    """An evaluations.csv row: the evaluation, the training return before it, and the critic's
+    estimate against the return (`inside`: common.q_against_return's three numbers)."""
     step, mean, std = evaluation
     done = [ret for s, ret in episodes if s <= step]
+    q, g, n = inside
     return dict(global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
-                train_return_mean10=float(np.mean(done[-10:])) if done else float("nan"))
+                train_return_mean10=float(np.mean(done[-10:])) if done else float("nan"),
+                q_estimate=q, discounted_return=g, q_states=n)
 
 
 def env_state(env):

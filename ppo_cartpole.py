@@ -185,7 +185,7 @@ def compute_loss_pi(policy, data, clip_coef):
     with torch.no_grad():
         log_ratio = logp - logp_old
         info = dict(approx_kl=((ratio - 1) - log_ratio).mean(),
-                    clipfrac=((ratio - 1).abs() > clip_coef).float().mean())
+                    clipfrac=((ratio - 1).abs() > clip_coef).float().mean(), ratio=ratio.detach())
     return loss_pi, dist.entropy().mean(), info
 
 
@@ -234,9 +234,11 @@ def ppo_update(policy, value_net, optimizer, data, cfg):
             stats.append(torch.stack([loss_pi.detach(), loss_v.detach(), entropy.detach(),
                                       info["clipfrac"]]))
     means = torch.stack(stats).mean(0).tolist()
-    return dict(zip(("loss_pi", "loss_v", "entropy"), means),
-                approx_kl=approx_kl(policy, data, cfg),  # how far the whole update moved pi
-                clipfrac=means[3], policy_stopped=int(policy_stopped))
+    with torch.no_grad():  # the whole batch after the update: how far pi moved, where r went
+        info = compute_loss_pi(policy, data, cfg.clip_coef)[2]
+    return dict(zip(("loss_pi", "loss_v", "entropy"), means), approx_kl=info["approx_kl"].item(),
+                clipfrac=means[3], policy_stopped=int(policy_stopped),
+                **common.ratio_stats(info["ratio"], data["adv"], cfg.clip_coef, cfg.norm_adv))
 
 
 # ==== Training ============================================================================
@@ -264,7 +266,7 @@ def train(cfg: Config):
     num_updates = cfg.total_timesteps // (T * N)
     # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
     run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(policy=policy, value=value_net),
-                       policy, untrained, device, obs_dim=obs_dim, n_actions=n_actions)
+                       policy, value_net, untrained, device, obs_dim=obs_dim, n_actions=n_actions)
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.

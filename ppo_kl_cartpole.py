@@ -261,7 +261,7 @@ def train(cfg: Config):
     num_updates = cfg.total_timesteps // (T * N)
     # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
     run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(policy=policy, value=value_net),
-                       policy, untrained, device, obs_dim=obs_dim, n_actions=n_actions)
+                       policy, value_net, untrained, device, obs_dim=obs_dim, n_actions=n_actions)
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.

@@ -111,13 +111,13 @@ def main():
                     if not a.exists() and not b.exists():
                         continue
                     same = a.exists() and b.exists() and filecmp.cmp(a, b, shallow=False)
-                    new = []
+                    added = []
                     if not same and a.exists() and b.exists():  # the same, but for new columns?
-                        same, new = same_old_columns(a, b)
+                        same, added = same_old_columns(a, b)
                     differ += not same
                     verdict = "SAME" if same else "DIFFERENT"
-                    if same and new:
-                        verdict += f" (and new columns: {', '.join(new)})"
+                    if same and added:
+                        verdict += f" (and new columns: {', '.join(added)})"
                     if not same and a.exists() and b.exists():
                         verdict += f" ({columns_that_differ(a, b)})"
                     print(f"{name:28} {log:16} {verdict}", flush=True)

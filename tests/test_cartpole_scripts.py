@@ -51,6 +51,7 @@ def test_smoke_run_writes_gifs_model_csv_and_curve(script, tmp_path):
     assert len(episodes) == len(result["episode_returns"]) == int(log[-1]["episodes"])
     assert [float(e["return"]) for e in episodes] == result["episode_returns"]
     assert_curve_drawn(run / "curve.png")
+    assert_curve_drawn(run / "inside.png")
 
 
 def assert_curve_drawn(path):

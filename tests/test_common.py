@@ -208,3 +208,54 @@ def test_make_continuous_env_refuses_discrete_actions_and_other_simulators():
     env = common.make_continuous_env("InvertedPendulum-v5")
     assert env.action_space.shape == (1,)
     env.close()
+
+
+
+# --- inside the algorithms ---------------------------------------------------------------
+
+
+def test_ratio_stats_match_numpy_and_the_gradient_itself():
+    """The quantiles are numpy's on the same ratios; the share of samples with no policy
+    gradient is the share whose term of L_CLIP has a zero gradient, found by autograd."""
+    torch.manual_seed(0)
+    logp = torch.randn(500, requires_grad=True)
+    ratio = torch.exp(logp - logp.detach() + 0.3 * torch.randn(500))  # r, its gradient via logp
+    adv = torch.randn(500) + 0.3
+    stats = common.ratio_stats(ratio.detach(), adv, 0.2, normalize=True)
+    r = ratio.detach().numpy()
+    for key, q in common.QUANTILES.items():
+        assert stats[key] == pytest.approx(np.quantile(r, q), rel=1e-5)
+    assert stats["ratio_min"] == pytest.approx(r.min()) and stats["ratio_max"] == pytest.approx(r.max())
+    a = adv - adv.mean()  # the update's normalized advantages have this sign
+    terms = torch.min(ratio * a, torch.clamp(ratio, 0.8, 1.2) * a)  # each sample's L_CLIP term
+    (grad,) = torch.autograd.grad(terms.sum(), logp)  # d term_i / d log pi(a_i|s_i)
+    assert stats["zero_grad_frac"] == pytest.approx((grad == 0).float().mean().item())
+    clipfrac = ((ratio.detach() - 1).abs() > 0.2).float().mean().item()
+    assert 0 < stats["zero_grad_frac"] < clipfrac  # the clip binds on one side only
+
+
+def test_q_against_return_is_the_critic_on_those_states_and_an_explicit_sum():
+    """Discounted returns from each state by explicit sums; Q by the critic on those states;
+    a time-limited episode's last `horizon` states left out, a terminated one's all kept."""
+    rng = np.random.default_rng(0)
+    cut = dict(obs=rng.normal(size=(8, 3)), rewards=rng.normal(size=8), terminated=False)
+    ended = dict(obs=rng.normal(size=(5, 3)), rewards=rng.normal(size=5), terminated=True)
+    actor = torch.nn.Linear(3, 2)
+    critic = lambda obs, action: obs.sum(-1) * 2 + action.sum(-1)  # noqa: E731
+    q, g, n = common.q_against_return([cut, ended], actor, critic, 0.9, "cpu", horizon=3)
+    states = np.concatenate([cut["obs"][:5], ended["obs"]])
+    returns = [sum(0.9 ** k * ep["rewards"][t + k] for k in range(len(ep["rewards"]) - t))
+               for ep, keep in ((cut, 5), (ended, 5)) for t in range(keep)]
+    with torch.no_grad():
+        x = torch.as_tensor(states, dtype=torch.float32)
+        want_q = critic(x, actor(x)).mean().item()
+    assert n == 10 and g == pytest.approx(np.mean(returns)) and q == pytest.approx(want_q, rel=1e-5)
+
+
+def test_evaluate_hands_back_each_episodes_states_and_rewards():
+    seen = []
+    returns = common.evaluate("CartPole-v1", lambda obs: 0, episodes=2, seed=3, trajectories=seen)
+    assert len(seen) == 2
+    for episode, total in zip(seen, returns):
+        assert episode["rewards"].sum() == total and len(episode["obs"]) == len(episode["rewards"])
+        assert episode["terminated"]  # always pushing left: the pole falls

@@ -201,7 +201,7 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
     result = ddpg.train(small(tmp_path))
     run = result["run_dir"]
     assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",
-                                               "best.gif", "curve.png", "before.gif", "after.gif",
+                                               "best.gif", "curve.png", "inside.png", "before.gif", "after.gif",
                                                "checkpoint.pt"}
     rows = list(csv.DictReader(open(run / "evaluations.csv")))
     assert [int(r["global_step"]) for r in rows] == [300, 600]
@@ -228,9 +228,13 @@ def test_quick_smoke_run_writes_its_files_and_replays(tmp_path):
                               start_steps=200, eval_every=150, eval_episodes=1))
     run = result["run_dir"]
     assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",
-                                               "best.gif", "curve.png", "before.gif", "after.gif",
+                                               "best.gif", "curve.png", "inside.png", "before.gif", "after.gif",
                                                "checkpoint.pt"}
     assert [s for s, _, _ in result["evaluations"]] == [150, 300]
+    from test_cartpole_scripts import assert_curve_drawn
+    assert_curve_drawn(run / "inside.png")
+    row = list(csv.DictReader(open(run / "evaluations.csv")))[-1]
+    assert int(row["q_states"]) > 0 and float(row["discounted_return"]) > 0
     assert play(run / "model.pt", 1) == [result["evaluations"][-1][1]]
 
 

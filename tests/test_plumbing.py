@@ -24,7 +24,7 @@ def a_run(tmp_path, threshold, **flags):
         **{"run_dir": str(tmp_path), "stop_when_solved": False, **flags})
     net = torch.nn.Linear(4, 2)
     opt = torch.optim.Adam(net.parameters())
-    return plumbing.Run("test", cfg, threshold, opt, dict(policy=net), net, net, "cpu",
+    return plumbing.Run("test", cfg, threshold, opt, dict(policy=net), net, net, net, "cpu",
                         obs_dim=4, n_actions=2)
 
 
@@ -405,3 +405,19 @@ def test_load_weights_mismatch_is_a_user_error():
     plumbing.load_weights(small, torch.nn.Linear(3, 2).state_dict(), "ok.pt")
     with pytest.raises(plumbing.UserError, match="other.pt does not fit this script's Linear"):
         plumbing.load_weights(small, big.state_dict(), "other.pt")
+
+
+
+@pytest.mark.quick
+def test_cartpole_maps_are_the_networks_at_grid_points():
+    torch.manual_seed(0)
+    policy, value = torch.nn.Linear(4, 2), torch.nn.Sequential(torch.nn.Linear(4, 1),
+                                                                 torch.nn.Flatten(0))
+    maps = plumbing.cartpole_maps(policy, value, "cpu", n=5)
+    for i, j in ((0, 0), (2, 3), (4, 1)):  # row: angular velocity, column: pole angle
+        obs = torch.tensor([[0.0, 0.0, maps["angle"][j], maps["velocity"][i]]], dtype=torch.float32)
+        with torch.no_grad():
+            assert maps["value"][i, j] == pytest.approx(value(obs).item(), rel=1e-5)
+            assert maps["right"][i, j] == pytest.approx(torch.softmax(policy(obs), -1)[0, 1].item(),
+                                                        rel=1e-5)
+    assert maps["angle"][0] == -0.21 and maps["velocity"][-1] == 2.0

@@ -115,9 +115,9 @@ def test_early_stop_checks_the_whole_batch_and_sticks(monkeypatch):
     n_policy = len(list(policy.parameters()))
     assert [state[i]["step"].item() for i in range(n_policy)] == [2] * n_policy  # 2 steps, no more
     assert stats["policy_stopped"] == 1
-    # Checked before the 1st, 2nd and 3rd policy steps, each time on all 64 rows; then only
-    # once more, after the update, for the log.
-    assert seen == [64] * 4
+    # Checked before the 1st, 2nd and 3rd policy steps, each time on all 64 rows, and no more
+    # (the log's KL after the update comes from compute_loss_pi on the whole batch).
+    assert seen == [64] * 3
 
 
 def test_logged_approx_kl_is_pi_after_the_update_against_pi_old_on_the_whole_batch():
