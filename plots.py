@@ -9,6 +9,7 @@ over the steps where all of them ran.
 
     python plots.py runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> compare.png
     python plots.py runs/ddpg_walker__* --out walker.png
+    python plots.py --maps runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> maps.png
 
 matplotlib is imported only here, with its Agg backend (no display needed): by
 DDPG at its first evaluation, by the CartPole scripts after training. Labels are ASCII:
@@ -187,8 +188,9 @@ def ratio_panels(fig, grid, progress, kept, eps):
         ax = fig.add_subplot(grid[1, column])
         r, adv = arrays["ratio"], arrays["adv"]
         bins = np.linspace(min(r.min(), 1 - 2 * eps), max(r.max(), 1 + 2 * eps), 40)
-        ax.hist(r[adv > 0], bins=bins, color="C2", alpha=0.6, label="A > 0")
-        ax.hist(r[adv < 0], bins=bins, color="C3", alpha=0.6, label="A < 0")
+        for sign, color, label in ((1, "C2", "A > 0"), (-1, "C3", "A < 0")):  # one polygon each
+            ax.hist(r[np.sign(adv) == sign], bins=bins, color=color, alpha=0.6, label=label,
+                    histtype="stepfilled")
         ax.axvspan(1 + eps, bins[-1], color="C2", alpha=0.08)  # A > 0 here: no gradient
         ax.axvspan(bins[0], 1 - eps, color="C3", alpha=0.08)  # A < 0 here: no gradient
         for v in (1 - eps, 1 + eps):
@@ -243,18 +245,20 @@ def value_fit_panels(fig, grid, progress, kept):
         ax.set_ylabel("V(s_t)", fontsize=8)
 
 
-def map_panels(fig, cell, maps):
-    """V(s) and pi(right|s) over pole angle and angular velocity, untrained and trained."""
-    sub = cell.subgridspec(1, 4, wspace=0.5)
-    for column, (key, when) in enumerate([(k, w) for k in ("value", "right")
-                                          for w in ("untrained", "trained")]):
+def map_panels(fig, cell, maps, title=""):
+    """V(s) and pi(right|s) over pole angle and angular velocity, for each map in `maps`
+    ("untrained", "trained"), in the grid cell `cell`."""
+    panels = [(k, w) for k in ("value", "right") for w in ("untrained", "trained") if w in maps]
+    sub = cell.subgridspec(1, len(panels), wspace=0.5)
+    for column, (key, when) in enumerate(panels):
         ax, m = fig.add_subplot(sub[0, column]), maps[when]
         extent = [m["angle"][0], m["angle"][-1], m["velocity"][0], m["velocity"][-1]]
         image = ax.imshow(m[key], origin="lower", aspect="auto", extent=extent,
                           cmap="viridis" if key == "value" else "coolwarm",
                           **({} if key == "value" else dict(vmin=0, vmax=1)))
         fig.colorbar(image, ax=ax, fraction=0.046)
-        ax.set_title(f"{'V(s)' if key == 'value' else 'pi(right | s)'}, {when}", fontsize=8)
+        what = "V(s)" if key == "value" else "pi(right | s)"
+        ax.set_title(f"{title + ': ' if title else ''}{what}, {when}", fontsize=8)
         ax.set_xlabel("pole angle (rad)", fontsize=7)
         ax.set_ylabel("angular velocity", fontsize=7)
 
@@ -379,16 +383,41 @@ def compare(run_dirs, out):
     return out
 
 
+def compare_maps(run_dirs, out):
+    """Write `out`: the trained V(s) and pi(right|s) of several CartPole runs (their
+    maps.npz), a row per run, so that the scripts' critics and policies sit side by side."""
+    plt, found = pyplot(), []
+    for run_dir in map(Path, run_dirs):
+        if not (run_dir / "maps.npz").exists():
+            print(f"error: {run_dir} has no maps.npz (a CartPole run that finished training "
+                  "writes one)", file=sys.stderr)
+            sys.exit(2)
+        found.append((run_dir.name.split("__")[0], dict(np.load(run_dir / "maps.npz"))))
+    fig = plt.figure(figsize=(8, 3 * len(found)))
+    grid = fig.add_gridspec(len(found), 1, hspace=0.5)
+    for row, (script, m) in enumerate(found):
+        map_panels(fig, grid[row, 0], {"trained": dict(
+            angle=m["angle"], velocity=m["velocity"], value=m["trained_value"],
+            right=m["trained_right"])}, title=script)
+    fig.savefig(out, dpi=72)
+    plt.close(fig)
+    return out
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("runs", nargs="+", help="run folders, e.g. runs/ppo_cartpole__*")
-    parser.add_argument("--out", default="compare.png", help="the PNG to write")
+    parser.add_argument("--out", default=None,
+                        help="the PNG to write (default: compare.png, or maps.png with --maps)")
+    parser.add_argument("--maps", action="store_true",
+                        help="the runs' trained V(s) and pi(right|s) side by side (CartPole)")
     args = parser.parse_args(argv)
+    out = args.out or ("maps.png" if args.maps else "compare.png")
     try:
-        print(f"wrote {compare(args.runs, args.out)}")
+        print(f"wrote {(compare_maps if args.maps else compare)(args.runs, out)}")
     except OSError as e:
-        print(f"error: cannot write {args.out}: {e.strerror}", file=sys.stderr)
+        print(f"error: cannot write {out}: {e.strerror}", file=sys.stderr)
         sys.exit(2)
 
 

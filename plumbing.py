@@ -428,6 +428,31 @@ def hours_minutes(seconds):
     return f"{minutes // 60} h {minutes % 60:02d} min" if minutes >= 60 else f"{minutes} min"
 
 
+def aside(draw, *args):
+    """Call draw(*args) (a picture: numpy and matplotlib only) in a forked child process, so
+    that it overlaps what this process does next; where there is no fork (or off Linux) call
+    it now. Returns a function that waits for it and says where the picture is."""
+    if sys.platform != "linux":
+        path = draw(*args)
+        return lambda: print(f"inside: {path}", flush=True)
+    pid = os.fork()
+    if pid == 0:  # the child: draw, then leave without the parent's exit handlers
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the parent's to handle
+        code = 1
+        try:
+            print(f"inside: {draw(*args)}", flush=True)
+            code = 0
+        finally:
+            os._exit(code)
+
+    def wait():
+        with ctrl_c_deferred():
+            _, status = os.waitpid(pid, 0)
+        if status != 0:
+            print("warning: inside.png could not be drawn", file=sys.stderr, flush=True)
+    return wait
+
+
 def clock(seconds):
     """1234.5 -> '20:34', 5000 -> '1:23:20'."""
     return time.strftime("%H:%M:%S", time.gmtime(seconds)).lstrip("0").lstrip(":") or "0"
@@ -580,14 +605,20 @@ class Run:
                            self.nets, **self.info)
 
     def draw_inside(self):
-        """inside.png: what the updates did (the kept arrays, progress.csv) and, on CartPole,
-        V(s) and pi(right|s) as maps, untrained and trained."""
+        """Start drawing inside.png (plots.draw_inside): what the updates did (the kept arrays,
+        progress.csv) and, on CartPole, V(s) and pi(right|s) as maps, untrained and trained,
+        also kept in maps.npz (`python plots.py --maps` puts several runs' side by side).
+        Returns a function that waits until the picture is written and says where it is."""
         maps = None
         if self.cfg.env_id.startswith("CartPole"):
             maps = {when: cartpole_maps(policy, value, self.device) for when, policy, value in (
                 ("untrained", self.untrained, self.untrained_value),
                 ("trained", self.policy, self.value))}
-        return plots.draw_inside(self.dir, self.script, asdict(self.cfg), self.kept, maps)
+            with written_whole(self.dir / "maps.npz") as tmp, open(tmp, "wb") as f:
+                np.savez(f, **{f"{when}_{key}": m[key] for when, m in maps.items()
+                               for key in ("value", "right")},
+                         angle=maps["trained"]["angle"], velocity=maps["trained"]["velocity"])
+        return aside(plots.draw_inside, self.dir, self.script, asdict(self.cfg), self.kept, maps)
 
     def finish(self):
         """After training: curve.png, TensorBoard, two evaluations (actions drawn from pi, and
@@ -609,11 +640,22 @@ class Run:
         elapsed = time.time() - self.start_time
         print(f"trained {step} steps, {len(self.episodes)} episodes in {elapsed:.1f}s; "
               f"model: {run_dir / 'model.pt'}", flush=True)
+        inside_drawn = lambda: None  # noqa: E731
         if cfg.curves:
-            with ctrl_c_deferred():  # Ctrl-C waits until curve.png and inside.png are whole
+            with ctrl_c_deferred():  # Ctrl-C waits until curve.png is whole
                 print(f"curve: {plots.draw_run(run_dir, self.threshold, self.solved_step)}",
                       flush=True)
-                print(f"inside: {self.draw_inside()}", flush=True)
+            inside_drawn = self.draw_inside()  # drawn aside while the evaluation runs
+        try:
+            self._evaluate_and_draw(result)
+        finally:
+            inside_drawn()  # a Ctrl-C too waits for inside.png (a second or less)
+        return result
+
+    def _evaluate_and_draw(self, result):
+        """finish(), after curve.png: TensorBoard, the two evaluations, the GIFs."""
+        cfg, run_dir, step = self.cfg, self.dir, self.global_step
+        elapsed = time.time() - self.start_time
         if cfg.tensorboard:
             plots.to_tensorboard(run_dir, sps=step / elapsed)
         # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the

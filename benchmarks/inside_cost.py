@@ -45,6 +45,7 @@ def main():
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("rev", help="the revision to compare with (before inside.png)")
     parser.add_argument("--pairs", type=int, default=5, help="interleaved runs of each side")
+    parser.add_argument("--only", default="", help="only the cases whose name has this")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="inside_cost_") as tmp:
         old_tree = Path(tmp) / "old_tree"
@@ -52,6 +53,8 @@ def main():
                        cwd=ROOT, check=True)
         try:
             for name, case in CASES.items():
+                if args.only not in name:
+                    continue
                 old, new = [], []
                 for i in range(args.pairs):
                     old.append(run(old_tree, case, Path(tmp) / f"o{name}{i}"))

@@ -4,6 +4,7 @@ import subprocess
 import sys
 
 import imageio.v3 as iio
+import numpy as np
 import pytest
 
 import ppo_cartpole as ppo
@@ -131,3 +132,25 @@ def test_ctrl_c_while_curve_png_is_written_keeps_the_old_one_and_no_tmp(tmp_path
         plots.draw_run(run)
     assert (run / "curve.png").read_bytes() == before
     assert not list(run.glob("*.tmp*"))
+
+
+
+def test_maps_of_several_runs_side_by_side(tmp_path):
+    """Each CartPole run keeps its maps in maps.npz; --maps draws the trained ones, a row per
+    run, and refuses a folder without them in one line."""
+    import importlib
+
+    runs = []
+    for name in ("ppo_cartpole", "actor_critic_cartpole"):
+        module = importlib.import_module(name)
+        runs.append(module.train(module.Config(
+            run_dir=str(tmp_path / name), total_timesteps=1024, stop_when_solved=False,
+            gifs=False, eval_episodes=1, print_every=10**6))["run_dir"])
+        maps = np.load(runs[-1] / "maps.npz")
+        assert maps["trained_value"].shape == maps["untrained_right"].shape == (41, 41)
+    out = tmp_path / "maps.png"
+    p = run_script("plots.py", "--maps", *runs, "--out", out)
+    assert p.returncode == 0, p.stderr
+    assert_curve_drawn(out)
+    bad = run_script("plots.py", "--maps", tmp_path)
+    assert bad.returncode == 2 and "has no maps.npz" in bad.stderr
