@@ -76,6 +76,9 @@ def test_a2c_loss_by_hand():
     assert stats["loss_v"] == pytest.approx(loss_v, rel=1e-6)
     assert stats["entropy"] == pytest.approx(entropy, rel=1e-6)
     assert loss.item() == pytest.approx(loss_pi + 0.5 * loss_v - 0.01 * entropy, rel=1e-6)
+    # inside.png's fit of V: 1 - Var(R - V) / Var(R), by hand: 1 - 1.125 / 0.125
+    assert stats["explained_var"] == pytest.approx(1 - 1.125 / 0.125, rel=1e-6)
+    assert stats["values"].tolist() == [1.0, 2.0] and stats["ret"].tolist() == [1.5, 1.0]
     # Descending the loss raises log pi of the action with A > 0 and moves V toward R.
     loss.backward()
     assert logits.grad[0, 1] < 0 and values.grad[0] < 0 and values.grad[1] > 0
