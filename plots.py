@@ -64,9 +64,15 @@ def draw_run(run_dir, solved_return=None, solved_step=None):
                             read_csv(run_dir / "progress.csv"), solved_return, solved_step)
     fig.axes[0].set_title(run_dir.name, fontsize=8)
     fig.tight_layout()
-    path, tmp = run_dir / "curve.png", Path(f"{run_dir / 'curve.png'}.tmp.png")
-    try:  # written aside, then renamed: a reader never sees half a file, Ctrl-C or not
-        fig.savefig(tmp, dpi=90)
+    return save_whole(plt, fig, run_dir / "curve.png", dpi=90)
+
+
+def save_whole(plt, fig, path, dpi):
+    """Save `fig` as `path`, written aside then renamed: a reader never sees half a file,
+    Ctrl-C or not; close it. Returns `path`."""
+    tmp = Path(f"{path}.tmp.png")
+    try:
+        fig.savefig(tmp, dpi=dpi)
         tmp.replace(path)
     finally:
         plt.close(fig)
@@ -146,14 +152,7 @@ def draw_inside(run_dir, script, cfg, kept=None, maps=None):
         if maps is not None:
             map_panels(fig, grid[rows - 1, :], maps)
     fig.suptitle(run_dir.name, fontsize=8, y=1 - 0.1 / height)
-    path, tmp = run_dir / "inside.png", Path(f"{run_dir / 'inside.png'}.tmp.png")
-    try:  # written aside, then renamed, as curve.png
-        fig.savefig(tmp, dpi=72)
-        tmp.replace(path)
-    finally:
-        plt.close(fig)
-        tmp.unlink(missing_ok=True)
-    return path
+    return save_whole(plt, fig, run_dir / "inside.png", dpi=72)
 
 
 def three_updates(kept):
