@@ -90,7 +90,7 @@ class Config(plumbing.CheckpointFlags):
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env with Box actions (Walker2d-v5, Hopper-v5, HalfCheetah-v5,
-    ...)"""
+    InvertedPendulum-v5, ...)"""
     seed: int = 0
     """seeds torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
     total_timesteps: int = 1_000_000

@@ -148,7 +148,8 @@ class OutputFlags:
     """write before.gif (untrained) and after.gif (trained) to the run folder, one episode each
     (CartPole scripts: actions drawn from pi, as in training and in tutorial 004's GIFs)"""
     curves: bool = True
-    """draw curve.png (returns, and what each update did) in the run folder"""
+    """draw curve.png (the learning curve) and inside.png (what the updates do inside the
+    algorithm; docs/inside.md) in the run folder"""
     tensorboard: bool = False
     """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
     names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
@@ -205,7 +206,8 @@ class CheckpointFlags(OutputFlags):
     """write before.gif (untrained actor), after.gif (trained actor) and best.gif (the best
     evaluation so far, refreshed as it improves) to the run folder"""
     curves: bool = True
-    """write curve.png (evaluation returns against env steps) at every evaluation"""
+    """write curve.png (evaluation returns against env steps) and inside.png (the critic's
+    Q against the return it estimates) at every evaluation"""
     checkpoint_every: int = 25_000
     """write checkpoint.pt (networks, optimizers, replay buffer, random generators, logs) every
     this many env steps and on Ctrl-C; --resume continues from it"""
@@ -239,14 +241,17 @@ def parse_config(cls, argv=None, description=None):
         how = dict(type=_or_none(convert) if "None" in name else convert, metavar=kind.upper())
         if kind == "bool":
             how = dict(action=argparse.BooleanOptionalAction)
+        text = docs.get(f.name, "") + ("; none on the command line: --" + f.name.replace("_", "-")
+                                       + " none" if "None" in name else "")
         parser.add_argument("--" + f.name.replace("_", "-"), default=f.default, **how,
-                            help=docs.get(f.name, "").replace("%", "%%"))  # % starts a format
+                            help=text.replace("%", "%%"))  # % starts a format
     args = parser.parse_args(argv)
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):
             parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")
     if getattr(args, "watch", False) and HEADLESS:  # fail now, not after hours of training
-        parser.error("--watch opens a window, but this machine has no display (see the GIFs)")
+        parser.error("--watch opens a window, but this machine has no display (see the GIFs, "
+                     "or write one of a saved model: --eval RUN --gif OUT.gif)")
     try:
         cfg = cls(**vars(args))
     except ValueError as e:
@@ -423,9 +428,12 @@ def stop_if_diverged(step, losses, nets, run_dir=None, obs=None):
 
 
 def hours_minutes(seconds):
-    """5000 -> '1 h 23 min', 90 -> '2 min'."""
+    """5000 -> 'about 1 h 23 min', 90 -> 'about 2 min', 20 -> 'under a minute'."""
     minutes = round(seconds / 60)
-    return f"{minutes // 60} h {minutes % 60:02d} min" if minutes >= 60 else f"{minutes} min"
+    if minutes < 1:
+        return "under a minute"
+    return (f"about {minutes // 60} h {minutes % 60:02d} min" if minutes >= 60
+            else f"about {minutes} min")
 
 
 def aside(draw, *args):
@@ -869,7 +877,7 @@ class CheckpointedRun:
         if step > cfg.start_steps and step > since_step:
             timer["rate"] = (step - since_step) / (now - since)
             left = (cfg.total_timesteps - step) / timer["rate"]
-            speed = f"{timer['rate']:5.0f} steps/s  about {hours_minutes(left)} to go"
+            speed = f"{timer['rate']:5.0f} steps/s  {hours_minutes(left)} to go"
         else:
             speed = "learning starts" if step > cfg.start_steps else "warm-up (random actions)"
         timer.update(step=step, time=now)
