@@ -1,0 +1,120 @@
+"""What the experiments share: run a script's train() over seeds, once per variant, and show
+the difference as a table (median and spread over seeds) and a figure. A variant is a dict of
+Config overrides and of code replaced for its runs only (`swap`: (object, attribute, new)),
+so the learning path of the scripts has no `if bug:` branch and no flag for it.
+"""
+
+import contextlib
+import csv
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # the scripts, when run as `python experiments/<name>.py`
+
+import plots  # noqa: E402
+
+OUT = ROOT / "docs" / "experiments"
+
+
+@contextlib.contextmanager
+def swapped(swaps):
+    """Within the block, each (owner, name, new) has owner.name = new; put back after."""
+    saved = [(owner, name, getattr(owner, name)) for owner, name, _ in swaps]
+    try:
+        for owner, name, new in swaps:
+            setattr(owner, name, new)
+        yield
+    finally:
+        for owner, name, old in saved:
+            setattr(owner, name, old)
+
+
+def run(script, variants, seeds, budget, **settings):
+    """{variant: [(steps, mean return of the last 20 episodes) per update, one per seed]}:
+    script.train() for each variant and seed, `budget` env steps, no solved stop, no GIFs."""
+    curves = {}
+    with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
+        for name, variant in variants.items():
+            curves[name] = []
+            for seed in seeds:
+                cfg = script.Config(**{
+                    **dict(seed=seed, total_timesteps=budget, stop_when_solved=False, gifs=False,
+                           curves=False, eval_episodes=1, print_every=10**9,
+                           run_dir=str(Path(tmp) / f"{name}{seed}")),
+                    **settings, **variant.get("config", {})})
+                started = time.time()
+                with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
+                    result = script.train(cfg)
+                table = plots.read_csv(result["run_dir"] / "progress.csv")
+                curves[name].append((table["global_step"], table["return_mean20"]))
+                print(f"{name:34} seed {seed}: final return(20) {table['return_mean20'][-1]:6.1f}"
+                      f"  ({time.time() - started:.0f} s)", flush=True)
+    return curves
+
+
+def first_step_at(steps, values, level):
+    """The first step where `values` reach `level`, or None."""
+    hit = np.flatnonzero(np.nan_to_num(values, nan=-np.inf) >= level)
+    return int(steps[hit[0]]) if len(hit) else None
+
+
+def report(name, curves, solved=475.0):
+    """Print and save (docs/experiments/<name>.csv) per variant: the final mean return of the
+    last 20 episodes and the first step it reached `solved`, each as median [min, max] over
+    seeds; draw docs/experiments/<name>.png: the median curve and the band of the seeds."""
+    OUT.mkdir(parents=True, exist_ok=True)
+    rows = []
+    print(f"\n{'variant':34} {'final return(20)':>26} {'steps to ' + str(int(solved)):>28}")
+    for variant, runs in curves.items():
+        finals = [float(v[-1]) for _, v in runs]
+        hits = [first_step_at(s, v, solved) for s, v in runs]
+        reached = sorted(h for h in hits if h is not None)
+        spread = (f"{statistics.median(reached):>9.0f} [{reached[0]}, {reached[-1]}]"
+                  if reached else "never")
+        print(f"{variant:34} {statistics.median(finals):9.1f} [{min(finals):5.1f}, "
+              f"{max(finals):5.1f}]   {spread} ({len(reached)}/{len(hits)} seeds)")
+        for seed_index, (final, hit) in enumerate(zip(finals, hits)):
+            rows.append(dict(variant=variant, seed_index=seed_index, final_return20=final,
+                             steps_to_solved=hit if hit is not None else ""))
+    with open(OUT / f"{name}.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    plt = plots.pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for color, (variant, runs) in enumerate(curves.items()):
+        grid = np.linspace(max(s[0] for s, _ in runs), min(s[-1] for s, _ in runs), 200)
+        values = np.array([np.interp(grid, s, np.nan_to_num(v)) for s, v in runs])
+        ax.fill_between(grid, values.min(0), values.max(0), color=f"C{color}", alpha=0.15)
+        ax.plot(grid, np.median(values, 0), color=f"C{color}", lw=2,
+                label=f"{variant} (median of {len(runs)} seeds; band: min to max)")
+    ax.axhline(solved, color="gray", ls="--", lw=1)
+    ax.set_xlabel("env steps")
+    ax.set_ylabel("mean return of the last 20 episodes")
+    ax.set_title(name, fontsize=9)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    return plots.save_whole(plt, fig, OUT / f"{name}.png", dpi=80)
+
+
+def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, **settings):
+    """python experiments/<name>.py [--quick]: every variant over `seeds` at `budget` steps,
+    then the table and the figure in docs/experiments/. --quick: one seed, 2048 steps, the
+    table only (a smoke test; the tests run it)."""
+    global OUT
+    quick = "--quick" in sys.argv[1:]
+    started = time.time()
+    if quick:
+        seeds, budget = seeds[:1], 2048
+        OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
+    curves = run(script, variants, seeds, budget, **settings)
+    path = report(name, curves)
+    print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
+          f"{time.time() - started:.0f} s; figure: {path}")
+    return curves
