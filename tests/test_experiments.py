@@ -14,10 +14,12 @@ from conftest import ROOT, run_script
 sys.path.insert(0, str(ROOT / "experiments"))
 import advantage_normalization  # noqa: E402
 import autoreset_not_masked  # noqa: E402
+import gae_lambda  # noqa: E402
 import lab  # noqa: E402
 import truncation_as_termination  # noqa: E402
 
-EXPERIMENTS = ("truncation_as_termination", "autoreset_not_masked", "advantage_normalization")
+EXPERIMENTS = ("truncation_as_termination", "autoreset_not_masked", "advantage_normalization",
+               "gae_lambda")
 
 
 def rollout(truncate_at=None):
@@ -60,6 +62,17 @@ def test_store_variant_keeps_the_autoreset_steps_and_nothing_else_changes():
 def test_advantage_variant_is_only_the_flag():
     (original, variant) = advantage_normalization.VARIANTS.values()
     assert original == {} and variant == {"config": {"norm_adv": False}}
+
+
+def test_gae_lambda_variants_are_only_the_setting_and_its_ends_are_td_and_returns():
+    assert [v.get("config", {}) for v in gae_lambda.VARIANTS.values()] == [
+        {}, {"lam": 0.0}, {"lam": 1.0}]
+    r, v, last, term, trunc = rollout(truncate_at=6)
+    nv = torch.cat([v[1:], last[:1]])  # V(s_{t+1}): the next stored obs's value, as in train()
+    delta = r + 0.99 * nv * (~term) - v  # lam = 0: the one-step TD error
+    assert torch.allclose(common.gae(r, v, nv, term, trunc, 0.99, 0.0), delta)
+    ret = common.discounted_returns(r, nv, term, trunc, 0.99)  # lam = 1: return minus V
+    assert torch.allclose(common.gae(r, v, nv, term, trunc, 0.99, 1.0), ret - v, atol=1e-6)
 
 
 def test_swapped_puts_the_original_back_even_after_an_error():
