@@ -36,24 +36,25 @@ def swapped(swaps):
 
 
 def run(script, variants, seeds, budget, **settings):
-    """{variant: [(steps, mean return of the last 20 episodes) per update, one per seed]}:
-    script.train() for each variant and seed, `budget` env steps, no solved stop, no GIFs."""
+    """{variant: [(steps, values), one per seed]}: script.train() for each variant and seed,
+    `budget` env steps, no solved stop, no GIFs. The values: the CartPole scripts' mean return
+    of the last 20 episodes after each update; DDPG's evaluation returns."""
     curves = {}
     with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
         for name, variant in variants.items():
             curves[name] = []
             for seed in seeds:
-                cfg = script.Config(**{
-                    **dict(seed=seed, total_timesteps=budget, stop_when_solved=False, gifs=False,
-                           curves=False, eval_episodes=1, print_every=10**9,
-                           run_dir=str(Path(tmp) / f"{name}{seed}")),
-                    **settings, **variant.get("config", {})})
+                quiet = dict(seed=seed, total_timesteps=budget, gifs=False, curves=False,
+                             print_every=10**9, run_dir=str(Path(tmp) / f"{name}{seed}"))
+                if hasattr(script.Config, "stop_when_solved"):  # the CartPole scripts
+                    quiet.update(stop_when_solved=False, eval_episodes=1)
+                cfg = script.Config(**{**quiet, **settings, **variant.get("config", {})})
                 started = time.time()
                 with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
                     result = script.train(cfg)
-                table = plots.read_csv(result["run_dir"] / "progress.csv")
-                curves[name].append((table["global_step"], table["return_mean20"]))
-                print(f"{name:34} seed {seed}: final return(20) {table['return_mean20'][-1]:6.1f}"
+                steps, values, _ = plots.curve_of(result["run_dir"])
+                curves[name].append((steps, values))
+                print(f"{name:34} seed {seed}: final {values[-1]:6.1f}"
                       f"  ({time.time() - started:.0f} s)", flush=True)
     return curves
 
@@ -64,13 +65,13 @@ def first_step_at(steps, values, level):
     return int(steps[hit[0]]) if len(hit) else None
 
 
-def report(name, curves, solved=475.0):
-    """Print and save (docs/experiments/<name>.csv) per variant: the final mean return of the
-    last 20 episodes and the first step it reached `solved`, each as median [min, max] over
-    seeds; draw docs/experiments/<name>.png: the median curve and the band of the seeds."""
+def report(name, curves, solved=475.0, what="mean return of the last 20 episodes"):
+    """Print and save (docs/experiments/<name>.csv) per variant: the final value (`what`) and
+    the first step it reached `solved`, each as median [min, max] over seeds; draw
+    docs/experiments/<name>.png: the median curve and the band of the seeds."""
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
-    print(f"\n{'variant':34} {'final return(20)':>26} {'steps to ' + str(int(solved)):>28}")
+    print(f"\n{'variant':34} {'final':>26} {'steps to ' + str(int(solved)):>28}")
     for variant, runs in curves.items():
         finals = [float(v[-1]) for _, v in runs]
         hits = [first_step_at(s, v, solved) for s, v in runs]
@@ -80,7 +81,7 @@ def report(name, curves, solved=475.0):
         print(f"{variant:34} {statistics.median(finals):9.1f} [{min(finals):5.1f}, "
               f"{max(finals):5.1f}]   {spread} ({len(reached)}/{len(hits)} seeds)")
         for seed_index, (final, hit) in enumerate(zip(finals, hits)):
-            rows.append(dict(variant=variant, seed_index=seed_index, final_return20=final,
+            rows.append(dict(variant=variant, seed_index=seed_index, final=final,
                              steps_to_solved=hit if hit is not None else ""))
     with open(OUT / f"{name}.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -96,14 +97,15 @@ def report(name, curves, solved=475.0):
                 label=f"{variant} (median of {len(runs)} seeds; band: min to max)")
     ax.axhline(solved, color="gray", ls="--", lw=1)
     ax.set_xlabel("env steps")
-    ax.set_ylabel("mean return of the last 20 episodes")
+    ax.set_ylabel(what)
     ax.set_title(name, fontsize=9)
     ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     return plots.save_whole(plt, fig, OUT / f"{name}.png", dpi=80)
 
 
-def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, **settings):
+def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=475.0,
+         what="mean return of the last 20 episodes", quick_budget=2048, **settings):
     """python experiments/<name>.py [--quick]: every variant over `seeds` at `budget` steps,
     then the table and the figure in docs/experiments/. --quick: one seed, 2048 steps, the
     table only (a smoke test; the tests run it)."""
@@ -111,10 +113,10 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, **setting
     quick = "--quick" in sys.argv[1:]
     started = time.time()
     if quick:
-        seeds, budget = seeds[:1], 2048
+        seeds, budget = seeds[:1], quick_budget
         OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
     curves = run(script, variants, seeds, budget, **settings)
-    path = report(name, curves)
+    path = report(name, curves, solved, what)
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
           f"{time.time() - started:.0f} s; figure: {path}")
     return curves

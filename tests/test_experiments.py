@@ -14,12 +14,13 @@ from conftest import ROOT, run_script
 sys.path.insert(0, str(ROOT / "experiments"))
 import advantage_normalization  # noqa: E402
 import autoreset_not_masked  # noqa: E402
+import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
 import truncation_as_termination  # noqa: E402
 
 EXPERIMENTS = ("truncation_as_termination", "autoreset_not_masked", "advantage_normalization",
-               "gae_lambda")
+               "gae_lambda", "critic_output_shape")
 
 
 def rollout(truncate_at=None):
@@ -73,6 +74,22 @@ def test_gae_lambda_variants_are_only_the_setting_and_its_ends_are_td_and_return
     assert torch.allclose(common.gae(r, v, nv, term, trunc, 0.99, 0.0), delta)
     ret = common.discounted_returns(r, nv, term, trunc, 0.99)  # lam = 1: return minus V
     assert torch.allclose(common.gae(r, v, nv, term, trunc, 0.99, 1.0), ret - v, atol=1e-6)
+
+
+def test_critic_variant_is_the_same_q_with_its_last_dimension_kept():
+    """Spinning Up's planted bug: the same numbers, shaped (B, 1); against (B,) targets the
+    TD target and the loss broadcast to (B, B)."""
+    import ddpg_walker
+
+    torch.manual_seed(0)
+    critic = ddpg_walker.Critic(3, 2, 16)
+    obs, action = torch.randn(5, 3), torch.randn(5, 2)
+    q = critic(obs, action)
+    q_variant = critic_output_shape.forward_keeping_its_dimension(critic, obs, action)
+    assert q.shape == (5,) and q_variant.shape == (5, 1)
+    assert torch.equal(q_variant.squeeze(-1), q)
+    y = ddpg_walker.td_target(torch.zeros(5), torch.ones(5), q_variant, 0.99)
+    assert y.shape == (5, 5)  # what the variant's critic is then trained toward
 
 
 def test_swapped_puts_the_original_back_even_after_an_error():
