@@ -128,16 +128,18 @@ def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, trajec
         if viewer is not None and render_mode == "human":
             viewer._hide_menu = True  # MuJoCo's window: its menu would cover half the walker
         for episode in range(1, episodes + 1):
-            done, total, seen, rewards = False, 0.0, [obs], []
+            done, total, seen, rewards = False, 0.0, [], []
             while not done:
+                if trajectories is not None:  # the states it acts in, and what each brought
+                    seen.append(obs)
                 obs, reward, terminated, truncated, _ = env.step(policy(obs))
                 total += float(reward)
                 done = terminated or truncated
-                seen.append(obs)
-                rewards.append(float(reward))
+                if trajectories is not None:
+                    rewards.append(float(reward))
             returns.append(total)
-            if trajectories is not None:  # the last obs is where the episode ended: not a state
-                trajectories.append(dict(obs=np.array(seen[:-1]), rewards=np.array(rewards),
+            if trajectories is not None:
+                trajectories.append(dict(obs=np.array(seen), rewards=np.array(rewards),
                                          terminated=bool(terminated)))
             if log:
                 print(f"episode {episode}/{episodes}: return {total:.1f}  (Ctrl-C stops)",

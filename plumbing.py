@@ -518,7 +518,8 @@ class Run:
                  **info):
         self.script, self.cfg, self.threshold, self.optimizer = script, cfg, threshold, optimizer
         self.nets, self.policy, self.untrained, self.device = nets, policy, untrained, device
-        self.value, self.untrained_value = value, copy.deepcopy(value)  # for maps in inside.png
+        self.value = value  # for the maps in inside.png; untrained, before any update:
+        self.untrained_value = untrained if value is policy else copy.deepcopy(value)
         self.kept = []  # (env step, {name: array}) of each update, for inside.png
         self.info = info  # what --eval needs to rebuild the networks, e.g. obs_dim
         self.start_time = time.time()
