@@ -34,11 +34,8 @@ VARIANTS = {
     "variant: Q left (B, 1)": {
         "swap": [(ddpg_walker.Critic, "forward", forward_keeping_its_dimension)]},
 }
-# The README's DDPG-in-minutes settings, evaluated every 2500 steps over 5 episodes.
-SETTINGS = dict(env_id="InvertedPendulum-v5", start_steps=1000, eval_every=2500, eval_episodes=5,
-                hidden=128, batch_size=128, actor_lr=1e-3, critic_lr=1e-3, tau=0.01)
 
 if __name__ == "__main__":
     warnings.filterwarnings("ignore", message="Using a target size")  # the variant's broadcast
     lab.main("critic_output_shape", ddpg_walker, VARIANTS, budget=20_000, solved=1000.0,
-             what="evaluation return (no noise)", quick_budget=2500, **SETTINGS)
+             what="evaluation return (no noise)", quick_budget=2500, **lab.DDPG_IN_MINUTES)

@@ -1,7 +1,8 @@
 """What the experiments share: run a script's train() over seeds, once per variant, and show
 the difference as a table (median and spread over seeds) and a figure. A variant is a dict of
 Config overrides and of code replaced for its runs only (`swap`: (object, attribute, new)),
-so the learning path of the scripts has no `if bug:` branch and no flag for it.
+so the learning path of the scripts has no `if bug:` branch and no flag for it; a variant may
+also name another script (`script`), to set two algorithms side by side.
 """
 
 import contextlib
@@ -20,6 +21,11 @@ sys.path.insert(0, str(ROOT))  # the scripts, when run as `python experiments/<n
 import plots  # noqa: E402
 
 OUT = ROOT / "docs" / "experiments"
+# The README's DDPG-in-minutes settings (InvertedPendulum-v5, 20,000 steps), evaluated every
+# 2500 steps over 5 episodes: the DDPG experiments' task.
+DDPG_IN_MINUTES = dict(env_id="InvertedPendulum-v5", start_steps=1000, eval_every=2500,
+                       eval_episodes=5, hidden=128, batch_size=128, actor_lr=1e-3,
+                       critic_lr=1e-3, tau=0.01)
 
 
 @contextlib.contextmanager
@@ -35,28 +41,38 @@ def swapped(swaps):
             setattr(owner, name, old)
 
 
-def run(script, variants, seeds, budget, **settings):
-    """{variant: [(steps, values), one per seed]}: script.train() for each variant and seed,
-    `budget` env steps, no solved stop, no GIFs. The values: the CartPole scripts' mean return
-    of the last 20 episodes after each update; DDPG's evaluation returns."""
+def run(script, variants, seeds, budget, columns=(), **settings):
+    """{variant: [(steps, values, kept), one per seed]}: the train() of `script` (or of the
+    variant's own "script") for each variant and seed, `budget` env steps, no solved stop, no
+    GIFs. The values: the CartPole scripts' mean return of the last 20 episodes after each
+    update; DDPG's evaluation returns. kept: {column: (steps, values)} for each of `columns`
+    in the run's log (progress.csv, or DDPG's evaluations.csv)."""
     curves = {}
     with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
         for name, variant in variants.items():
             curves[name] = []
+            module = variant.get("script", script)
             for seed in seeds:
                 quiet = dict(seed=seed, total_timesteps=budget, gifs=False, curves=False,
                              print_every=10**9, run_dir=str(Path(tmp) / f"{name}{seed}"))
-                if hasattr(script.Config, "stop_when_solved"):  # the CartPole scripts
+                if hasattr(module.Config, "stop_when_solved"):  # the CartPole scripts
                     quiet.update(stop_when_solved=False, eval_episodes=1)
-                cfg = script.Config(**{**quiet, **settings, **variant.get("config", {})})
+                cfg = module.Config(**{**quiet, **settings, **variant.get("config", {})})
                 started = time.time()
                 with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
-                    result = script.train(cfg)
+                    result = module.train(cfg)
                 steps, values, _ = plots.curve_of(result["run_dir"])
-                curves[name].append((steps, values))
-                print(f"{name:34} seed {seed}: final {values[-1]:6.1f}"
+                curves[name].append((steps, values, kept_columns(result["run_dir"], columns)))
+                print(f"{name:40} seed {seed}: final {values[-1]:6.1f}"
                       f"  ({time.time() - started:.0f} s)", flush=True)
     return curves
+
+
+def kept_columns(run_dir, columns):
+    """{column: (steps, values)} of a run's log, for each of `columns` it has."""
+    log = Path(run_dir) / "evaluations.csv"
+    table = plots.read_csv(log if log.exists() else Path(run_dir) / "progress.csv")
+    return {c: (table["global_step"], table[c]) for c in columns if c in table}
 
 
 def first_step_at(steps, values, level):
@@ -65,47 +81,76 @@ def first_step_at(steps, values, level):
     return int(steps[hit[0]]) if len(hit) else None
 
 
-def report(name, curves, solved=475.0, what="mean return of the last 20 episodes"):
+def report(name, curves, solved=475.0, what="mean return of the last 20 episodes", panels=()):
     """Print and save (docs/experiments/<name>.csv) per variant: the final value (`what`) and
     the first step it reached `solved`, each as median [min, max] over seeds; draw
-    docs/experiments/<name>.png: the median curve and the band of the seeds."""
+    docs/experiments/<name>.png: the median curve and the band of the seeds. panels: (column,
+    label, log) of kept columns, each printed (median over all updates or evaluations of all
+    seeds, and its min and max) and drawn below, the same way."""
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
-    print(f"\n{'variant':34} {'final':>26} {'steps to ' + str(int(solved)):>28}")
+    print(f"\n{'variant':40} {'final':>26} {'steps to ' + str(int(solved)):>28}")
     for variant, runs in curves.items():
-        finals = [float(v[-1]) for _, v in runs]
-        hits = [first_step_at(s, v, solved) for s, v in runs]
+        finals = [float(v[-1]) for _, v, _ in runs]
+        hits = [first_step_at(s, v, solved) for s, v, _ in runs]
         reached = sorted(h for h in hits if h is not None)
         spread = (f"{statistics.median(reached):>9.0f} [{reached[0]}, {reached[-1]}]"
                   if reached else "never")
-        print(f"{variant:34} {statistics.median(finals):9.1f} [{min(finals):5.1f}, "
+        print(f"{variant:40} {statistics.median(finals):9.1f} [{min(finals):5.1f}, "
               f"{max(finals):5.1f}]   {spread} ({len(reached)}/{len(hits)} seeds)")
-        for seed_index, (final, hit) in enumerate(zip(finals, hits)):
-            rows.append(dict(variant=variant, seed_index=seed_index, final=final,
-                             steps_to_solved=hit if hit is not None else ""))
+        for seed_index, (final, hit, (_, _, kept)) in enumerate(zip(finals, hits, runs)):
+            row = dict(variant=variant, seed_index=seed_index, final=final,
+                       steps_to_solved=hit if hit is not None else "")
+            for column, _, _ in panels:  # this seed's median, min and max of the column
+                values = kept[column][1][np.isfinite(kept[column][1])]
+                row.update({f"{column}_median": float(np.median(values)),
+                            f"{column}_min": float(values.min()),
+                            f"{column}_max": float(values.max())})
+            rows.append(row)
+    for column, label, _ in panels:
+        print(f"\n{label}: median over every point of every seed [min, max]")
+        for variant, runs in curves.items():
+            values = np.concatenate([kept[column][1] for _, _, kept in runs])
+            values = values[np.isfinite(values)]
+            print(f"{variant:40} {np.median(values):10.4g} [{values.min():.4g}, "
+                  f"{values.max():.4g}]")
     with open(OUT / f"{name}.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
     plt = plots.pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, axes = plt.subplots(1 + len(panels), 1, figsize=(7, 4 + 2.6 * len(panels)),
+                             sharex=True, squeeze=False)
+    ax = axes[0, 0]
     for color, (variant, runs) in enumerate(curves.items()):
-        grid = np.linspace(max(s[0] for s, _ in runs), min(s[-1] for s, _ in runs), 200)
-        values = np.array([np.interp(grid, s, np.nan_to_num(v)) for s, v in runs])
-        ax.fill_between(grid, values.min(0), values.max(0), color=f"C{color}", alpha=0.15)
-        ax.plot(grid, np.median(values, 0), color=f"C{color}", lw=2,
-                label=f"{variant} (median of {len(runs)} seeds; band: min to max)")
+        band(ax, [(s, v) for s, v, _ in runs], color,
+             f"{variant} (median of {len(runs)} seeds; band: min to max)")
     ax.axhline(solved, color="gray", ls="--", lw=1)
-    ax.set_xlabel("env steps")
     ax.set_ylabel(what)
     ax.set_title(name, fontsize=9)
     ax.legend(fontsize=7, loc="lower right")
+    for (column, label, log), (ax,) in zip(panels, axes[1:]):
+        for color, (variant, runs) in enumerate(curves.items()):
+            band(ax, [kept[column] for _, _, kept in runs], color)
+        ax.set_ylabel(label, fontsize=8)
+        if log:
+            ax.set_yscale("log")
+    axes[-1, 0].set_xlabel("env steps")
     fig.tight_layout()
     return plots.save_whole(plt, fig, OUT / f"{name}.png", dpi=80)
 
 
+def band(ax, runs, color, label=None):
+    """On `ax`: the median over seeds of runs [(steps, values)] (a line) and their min to max
+    (a band), on a grid of 200 steps where every run has a value."""
+    grid = np.linspace(max(s[0] for s, _ in runs), min(s[-1] for s, _ in runs), 200)
+    values = np.array([np.interp(grid, s, np.nan_to_num(v)) for s, v in runs])
+    ax.fill_between(grid, values.min(0), values.max(0), color=f"C{color}", alpha=0.15)
+    ax.plot(grid, np.median(values, 0), color=f"C{color}", lw=2, label=label)
+
+
 def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=475.0,
-         what="mean return of the last 20 episodes", quick_budget=2048, **settings):
+         what="mean return of the last 20 episodes", quick_budget=2048, panels=(), **settings):
     """python experiments/<name>.py [--quick]: every variant over `seeds` at `budget` steps,
     then the table and the figure in docs/experiments/. --quick: one seed, 2048 steps, the
     table only (a smoke test; the tests run it)."""
@@ -115,8 +160,8 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     if quick:
         seeds, budget = seeds[:1], quick_budget
         OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
-    curves = run(script, variants, seeds, budget, **settings)
-    path = report(name, curves, solved, what)
+    curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], **settings)
+    path = report(name, curves, solved, what, panels)
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
           f"{time.time() - started:.0f} s; figure: {path}")
     return curves

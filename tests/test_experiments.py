@@ -14,13 +14,17 @@ from conftest import ROOT, run_script
 sys.path.insert(0, str(ROOT / "experiments"))
 import advantage_normalization  # noqa: E402
 import autoreset_not_masked  # noqa: E402
+import clip_or_penalty  # noqa: E402
 import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
+import target_networks  # noqa: E402
 import truncation_as_termination  # noqa: E402
+import truncation_as_termination_ddpg  # noqa: E402
 
 EXPERIMENTS = ("truncation_as_termination", "autoreset_not_masked", "advantage_normalization",
-               "gae_lambda", "critic_output_shape")
+               "gae_lambda", "critic_output_shape", "truncation_as_termination_ddpg",
+               "clip_or_penalty", "target_networks")
 
 
 def rollout(truncate_at=None):
@@ -90,6 +94,123 @@ def test_critic_variant_is_the_same_q_with_its_last_dimension_kept():
     assert torch.equal(q_variant.squeeze(-1), q)
     y = ddpg_walker.td_target(torch.zeros(5), torch.ones(5), q_variant, 0.99)
     assert y.shape == (5, 5)  # what the variant's critic is then trained toward
+
+
+def test_time_limit_wrapper_changes_only_terminated_and_only_at_the_truncation():
+    """The DDPG variant: step for step the same env, except that the truncated step also
+    reports terminated (so ddpg_walker stores not_done = 0 there)."""
+    import gymnasium as gym
+
+    def steps(env):
+        env.reset(seed=0)
+        return [env.step(np.zeros(1, dtype=np.float32)) for _ in range(4)]
+
+    limit = 4  # a short limit, so that the pole is still up when it is reached
+    plain = gym.wrappers.TimeLimit(gym.make("InvertedPendulum-v5"), limit)
+    variant = truncation_as_termination_ddpg.TimeLimitAsTermination(
+        gym.wrappers.TimeLimit(gym.make("InvertedPendulum-v5"), limit))
+    for t, (a, b) in enumerate(zip(steps(plain), steps(variant))):
+        assert np.array_equal(a[0], b[0]) and a[1] == b[1] and a[3] == b[3]
+        assert a[2] is False  # the pole did not fall: only the time limit ends the episode
+        assert b[2] == (t == limit - 1) == a[3]
+    env = truncation_as_termination_ddpg.make_env_time_limit_as_termination("InvertedPendulum-v5")
+    assert isinstance(env, truncation_as_termination_ddpg.TimeLimitAsTermination)
+    assert isinstance(env.env, gym.wrappers.RecordEpisodeStatistics)  # common's env inside
+
+
+def test_loss_without_clip_is_the_clipped_loss_with_an_infinite_band():
+    """The no-clip variant: the same loss and gradient as compute_loss_pi with eps so large
+    that no ratio leaves the band; with eps = 0.2 and ratios outside it, a different one."""
+    policy, _, data = ppo_batch()
+    with torch.no_grad():
+        for p in policy.parameters():
+            p.add_(0.5 * torch.randn_like(p))  # pi moved: some ratios leave [0.8, 1.2]
+
+    def loss_and_grad(fn, eps):
+        policy.zero_grad()
+        loss = fn(policy, data, eps)[0]
+        loss.backward()
+        return loss.item(), [p.grad.clone() for p in policy.parameters()]
+
+    variant = loss_and_grad(clip_or_penalty.compute_loss_pi_without_clip, 0.2)
+    unbounded = loss_and_grad(ppo_cartpole.compute_loss_pi, 1e9)
+    clipped = loss_and_grad(ppo_cartpole.compute_loss_pi, 0.2)
+    assert variant[0] == pytest.approx(unbounded[0], rel=1e-6)
+    assert all(torch.allclose(a, b) for a, b in zip(variant[1], unbounded[1]))
+    assert variant[0] != pytest.approx(clipped[0], rel=1e-3)
+
+
+@pytest.mark.parametrize("script", ["ppo_cartpole", "ppo_kl_cartpole"])
+def test_measured_update_is_the_update_plus_three_numbers_it_only_reads(script):
+    """clip_or_penalty.measured: the same parameters and stats as the bare update from the
+    same state and seed, plus kl_after and the ratio's range, computed here by brute force."""
+    import importlib
+
+    from torch.distributions import Categorical
+
+    module = importlib.import_module(script)
+    cfg = module.Config()
+    results = []
+    for update in (module.ppo_update, clip_or_penalty.measured(module.ppo_update)):
+        policy, value_net, data = ppo_batch()
+        with torch.no_grad():
+            data["logits_old"] = policy(data["obs"])  # ppo_kl_cartpole's exact KL needs it
+        opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=0.01)
+        rest = (cfg,) if script == "ppo_cartpole" else (1.0, cfg)  # ppo_kl's beta
+        torch.manual_seed(1)
+        stats = update(policy, value_net, opt, data, *rest)
+        results.append((stats, [p.detach().clone() for p in policy.parameters()], data, policy))
+    (bare, bare_params, _, _), (stats, params, data, policy) = results
+    assert all(torch.equal(a, b) for a, b in zip(bare_params, params))
+    assert set(stats) - set(bare) == {"kl_after", "ratio_low", "ratio_high"}
+    for key in bare:
+        if not torch.is_tensor(bare[key]):
+            assert stats[key] == bare[key]
+    with torch.no_grad():
+        p_old = torch.softmax(data["logits_old"], -1)
+        p_new = torch.softmax(policy(data["obs"]), -1)
+        kl = (p_old * (p_old.log() - p_new.log())).sum(-1).mean().item()
+        ratio = p_new.gather(1, data["act"][:, None]).squeeze(1) / data["logp"].exp()
+    assert stats["kl_after"] == pytest.approx(kl, rel=1e-4) and kl > 0
+    assert stats["ratio_low"] == pytest.approx(ratio.min().item(), rel=1e-5)
+    assert stats["ratio_high"] == pytest.approx(ratio.max().item(), rel=1e-5)
+
+
+def test_target_network_variants_are_only_the_setting_and_tau_1_copies():
+    import ddpg_walker
+
+    assert [v["config"] for v in target_networks.VARIANTS.values()] == [
+        {"tau": 0.005}, {"tau": 1.0}]
+    source, target = torch.nn.Linear(3, 2), torch.nn.Linear(3, 2)
+    ddpg_walker.soft_update(target, source, 1.0)  # tau = 1: the target is the network itself
+    assert torch.equal(target.weight, source.weight) and torch.equal(target.bias, source.bias)
+
+
+def test_a_variant_may_run_another_script_and_keep_its_log_columns(tmp_path, monkeypatch):
+    """lab.run: the variant's own script is trained, and the kept columns are its log's."""
+    import ppo_kl_cartpole
+
+    monkeypatch.setattr(lab, "OUT", tmp_path)
+    variants = {"original": {}, "variant": {"script": ppo_kl_cartpole}}
+    curves = lab.run(ppo_cartpole, variants, (0,), 512, ["approx_kl", "beta", "lr"])
+    assert set(curves["original"][0][2]) == {"approx_kl", "lr"}  # PPO-clip logs no beta
+    assert set(curves["variant"][0][2]) == {"beta", "lr"}  # PPO-penalty logs no approx_kl
+    steps, betas = curves["variant"][0][2]["beta"]
+    assert len(steps) == len(betas) == 2 and betas[0] == 1.0  # 512 steps: two updates of 256
+    lab.report("x", curves, panels=[("lr", "learning rate", True)])
+    rows = (tmp_path / "x.csv").read_text().splitlines()
+    assert rows[0] == "variant,seed_index,final,steps_to_solved,lr_median,lr_min,lr_max"
+    assert (tmp_path / "x.png").stat().st_size > 0
+
+
+def ppo_batch(B=40):
+    torch.manual_seed(0)
+    policy, value_net = ppo_cartpole.PolicyNetwork(4, 2, 8), ppo_cartpole.ValueNetwork(4, 8)
+    obs, act = torch.randn(B, 4), torch.randint(0, 2, (B,))
+    with torch.no_grad():
+        logp = torch.distributions.Categorical(logits=policy(obs)).log_prob(act)
+    return policy, value_net, dict(obs=obs, act=act, logp=logp, adv=torch.randn(B),
+                                   ret=torch.randn(B))
 
 
 def test_swapped_puts_the_original_back_even_after_an_error():
