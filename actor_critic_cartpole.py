@@ -17,12 +17,12 @@ where PPO takes many behind its clip. The loop in train(), top to bottom:
 After training, plumbing.Run.finish draws curve.png, evaluates pi and writes before.gif and
 after.gif; --eval and --watch replay a saved model (plumbing.play).
 
-    python actor_critic_cartpole.py                  # train until solved (about a minute on a CPU)
+    python actor_critic_cartpole.py                  # train until solved (under a minute on a CPU)
     python actor_critic_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
 中文导读：A2C（优势演员-评论员）：一个共享隐藏层接演员和评论员两个头，每采一批数据就用
 n 步回报更新一次，不必等回合结束。配套教程：004《使用 actor-critic 方法来控制 CartPole-V0
-游戏》。train() 里的循环：采样、算 n 步回报和优势、更新、记录（含 running reward）。
+游戏》。train() 里的循环：采集数据、算 n 步回报和优势、更新、记录（含平滑回报）。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
@@ -90,8 +90,8 @@ class Config(plumbing.SolvedCheckFlags):
     num_envs: int = 8
     """parallel envs (A3C's parallel actors, here in lockstep; 1 .. 64)"""
     num_steps: int = 64
-    """steps per env between updates, the n of the n-step return (A3C: 5 .. 20; here longer,
-    so that CartPole's one signal, the pole falling, reaches back further per update)"""
+    """steps per env between updates: the longest n of the n-step returns (a rollout's first
+    step looks num_steps ahead, its last one step; A3C: 5 .. 20; longer here for CartPole)"""
     # --- A2C ---
     learning_rate: float = 0.01
     """Adam step size (tutorial 004: 0.01; A2C usually 7e-4 .. 1e-2)"""
@@ -101,7 +101,7 @@ class Config(plumbing.SolvedCheckFlags):
     """discount factor (tutorial 004: 0.99; 0.95 .. 0.99); 0.98 looks about 50 steps ahead"""
     reward_scale: float | None = None
     """rewards are multiplied by this for learning (logged returns are not); none = 1 - gamma
-    (1 when gamma = 1), which keeps V's targets in [0, 1] (the tutorial normalizes returns)"""
+    (1 when gamma = 1): true values in [0, 1], targets near it (the tutorial normalizes returns)"""
     lam: float | None = None
     """none = the textbook n-step returns and A = R - V; a number in [0, 1] = GAE(lambda)
     advantages instead (Schulman et al. 2016; 0.9 .. 0.97 usual)"""
@@ -156,7 +156,7 @@ def a2c_targets(model, rollout, next_obs, cfg):
     with torch.no_grad():  # targets are constants: no gradient flows into the bootstrap
         _, values = model(rollout["obs"])  # (T, N)
         # V(s_{t+1}) is the value of the next stored obs. After a done step that obs is the
-        # episode's real final observation (the reset step reports it), so a truncated step
+        # episode's real final observation (the done step returned it), so a truncated step
         # bootstraps from it and a terminated one ignores it.
         _, last_value = model(torch.as_tensor(next_obs, dtype=torch.float32, device=values.device))
         next_values = torch.cat([values[1:], last_value[None]])  # (T, N)

@@ -194,8 +194,8 @@ def ratio_stats(ratio, adv, clip_coef, normalize=True):
     The clip does not keep r inside [1 - eps, 1 + eps]. min(r A, clip(r) A) only goes flat
     on the side the advantage favours: for A > 0 once r > 1 + eps, for A < 0 once r < 1 - eps.
     Such a sample stops pulling pi further; the other samples, and the shared network, still
-    move it. clipfrac counts |r - 1| > eps on both sides, so it is larger. `adv` is normalized
-    over the batch first when the update normalizes it (normalize=True), as its sign decides.
+    move it. On the same ratios clipfrac (|r - 1| > eps, either side) is larger. The sign of `adv`
+    is taken against the batch's mean when the update normalizes (per minibatch: approximate).
 
     >>> r, a = torch.tensor([1.5, 1.5, 0.5, 0.5, 1.0]), torch.tensor([1., -1., 1., -1., 1.])
     >>> ratio_stats(r, a, 0.2, normalize=False)["zero_grad_frac"]  # samples 0 and 3

@@ -16,8 +16,8 @@ after.gif; --eval and --watch replay a saved model (plumbing.play).
 
 中文导读：PPO-clip（近端策略优化的裁剪版本，教程里叫 PPO2）。配套教程：000《PPO近段策略
 优化玩cartpole游戏》（“近段”应为“近端”）、001《强化学习PPO从理论到代码详解(2)---PPO1和PPO2》
-和 002（讲 compute_loss_pi 和 finish_path，原文无标题）。train() 里的循环四步：采样、算优势
-（GAE）、更新、记录。
+和 002（讲 compute_loss_pi 和 finish_path，原文无标题）。train() 里的循环四步：采集数据、
+算优势（GAE）、更新、记录。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)

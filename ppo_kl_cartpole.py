@@ -1,8 +1,8 @@
 """PPO-penalty on CartPole-v1: the adaptive KL penalty of Schulman et al. 2017, section 4.
 
 Tutorial 001 calls it PPO1: instead of clipping the ratio (PPO2, ppo_cartpole.py), it
-subtracts beta * KL(pi_old || pi) from the surrogate and adapts beta after every update so
-that the KL stays near a target d_targ; the clip and its early stop (--target-kl) go, and
+subtracts beta * KL(pi_old || pi) from the surrogate and adapts beta after every update,
+pushing the KL toward a target d_targ; the clip and its early stop (--target-kl) go, and
 the logs show kl and beta. The loop in train(), top to bottom:
 
     collect  num_steps x num_envs transitions with the current policy
@@ -17,8 +17,8 @@ after.gif; --eval and --watch replay a saved model (plumbing.play).
     python ppo_kl_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
 中文导读：PPO-penalty（近端策略优化的 KL 惩罚版本，教程里叫 PPO1）：把 KL 散度作为惩罚项
-放进目标函数，每次更新后按 KL 的大小把 beta 减半或加倍。配套教程：001《强化学习PPO从理论到
-代码详解(2)---PPO1和PPO2》。train() 里的循环：采样、算优势（GAE）、更新、调整 beta、记录。
+放进目标函数，每次更新后按 KL 的大小把惩罚系数 β 减半或加倍。配套教程：001《强化学习PPO
+从理论到代码详解(2)---PPO1和PPO2》和 002。train() 里的循环：采集、算优势、更新、调整 β、记录。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)

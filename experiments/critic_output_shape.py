@@ -3,8 +3,8 @@
 Spinning Up's exercise 2.2 plants this bug. ddpg_walker.py's Critic returns Q as (B,): it
 squeezes the (B, 1) of its last layer. The variant leaves it (B, 1). Nothing fails: the TD
 target r + gamma * not_done * Q'(s', mu'(s')), with r shaped (B,), broadcasts to a (B, B)
-matrix, and the critic's loss compares every Q with every sample's target (torch only warns).
-The critic then learns about the average target, not about each (s, a). What to look for:
+matrix: y[i, j] = r_j + gamma * not_done_j * Q'(s'_i), and Q_i is fit to their mean over j, so
+it keeps its own s' but loses its own reward and termination (torch only warns). Look for:
 the original balances the pole (return 1000, the maximum) within 20k steps; the variant
 should not learn at all, or far worse.
 

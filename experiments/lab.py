@@ -94,8 +94,7 @@ def report(name, curves, solved=475.0, what="mean return of the last 20 episodes
         finals = [float(v[-1]) for _, v, _ in runs]
         hits = [first_step_at(s, v, solved) for s, v, _ in runs]
         reached = sorted(h for h in hits if h is not None)
-        spread = (f"{statistics.median(reached):>9.0f} [{reached[0]}, {reached[-1]}]"
-                  if reached else "never")
+        spread = "never" if not reached else steps_median_and_range(hits)
         print(f"{variant:40} {statistics.median(finals):9.1f} [{min(finals):5.1f}, "
               f"{max(finals):5.1f}]   {spread} ({len(reached)}/{len(hits)} seeds)")
         for seed_index, (final, hit, (_, _, kept)) in enumerate(zip(finals, hits, runs)):
@@ -140,6 +139,21 @@ def report(name, curves, solved=475.0, what="mean return of the last 20 episodes
     return plots.save_whole(plt, fig, OUT / f"{name}.png", dpi=80)
 
 
+def steps_median_and_range(hits):
+    """"median [min, max]" of the steps at which the seeds reached the level; a seed that never
+    did counts as later than all (so the median is over every seed): "never" where it lands.
+
+    >>> steps_median_and_range([53760, 24576, None, 21504, 21504])
+    '24576 [21504, never]'
+    """
+    ordered = sorted(hits, key=lambda h: (h is None, h or 0))
+    show = ["never" if h is None else str(h) for h in ordered]
+    middle = show[len(show) // 2] if len(show) % 2 else (
+        "never" if None in ordered[len(show) // 2 - 1:len(show) // 2 + 1]
+        else f"{statistics.median(ordered[len(show) // 2 - 1:len(show) // 2 + 1]):.0f}")
+    return f"{middle} [{show[0]}, {show[-1]}]"
+
+
 def band(ax, runs, color, label=None):
     """On `ax`: the median over seeds of runs [(steps, values)] (a line) and their min to max
     (a band), on a grid of 200 steps where every run has a value."""
@@ -155,7 +169,15 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     then the table and the figure in docs/experiments/. --quick: one seed, 2048 steps, the
     table only (a smoke test; the tests run it)."""
     global OUT
-    quick = "--quick" in sys.argv[1:]
+    args = sys.argv[1:]
+    if {"-h", "--help"} & set(args):
+        print(sys.modules["__main__"].__doc__.strip())  # the experiment's question and what to see
+        raise SystemExit(0)
+    if args not in ([], ["--quick"]):
+        print(f"error: unknown argument(s) {' '.join(args)}; the only option is --quick "
+              "(see --help)", file=sys.stderr)
+        raise SystemExit(2)
+    quick = args == ["--quick"]
     started = time.time()
     if quick:
         seeds, budget = seeds[:1], quick_budget

@@ -229,3 +229,21 @@ def test_each_experiment_runs_in_quick_mode(name):
     lines = p.stdout.splitlines()
     assert any(line.startswith("original") for line in lines)
     assert any(line.startswith("variant") for line in lines)
+
+
+def test_median_steps_count_the_seeds_that_never_got_there():
+    """A seed that never reached the level is later than all: the median is over every seed."""
+    assert lab.steps_median_and_range([53760, 24576, None, 21504, 21504]) == "24576 [21504, never]"
+    assert lab.steps_median_and_range([None, 56832, None, None, None]) == "never [56832, never]"
+    assert lab.steps_median_and_range([3, 1, 2]) == "2 [1, 3]"
+
+
+@pytest.mark.quick
+def test_help_prints_the_question_and_a_bad_argument_is_one_line():
+    """--help must not start the experiment's runs; a typo is one line and exit 2."""
+    p = run_script("experiments/clip_or_penalty.py", "--help", timeout=60)
+    assert p.returncode == 0 and p.stdout.startswith("Question:"), p.stderr
+    p = run_script("experiments/clip_or_penalty.py", "--qick", timeout=60)
+    assert p.returncode == 2 and p.stdout == ""
+    assert p.stderr.strip().splitlines() == [
+        "error: unknown argument(s) --qick; the only option is --quick (see --help)"]

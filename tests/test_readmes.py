@@ -166,8 +166,9 @@ def test_zh_variable_names_exist_in_the_script_named():
 
 
 def test_zh_hyperparameter_tables_match_each_config():
-    """Every flag of every script is in a table that names the script, once, with the
-    default that script's Config has."""
+    """Each flag in the guide's tables is a flag of every script its table names, shown once,
+    with the default that script's Config has; the flags that stand for a tutorial's variable
+    are among them (the rest: each script's --help)."""
     configs = {s: importlib.import_module(s[:-3]).Config for s in SCRIPTS}
     seen = {s: [] for s in SCRIPTS}
     scripts = ()
@@ -188,11 +189,18 @@ def test_zh_hyperparameter_tables_match_each_config():
             assert same(shown, fields[name]), \
                 f"{script} --{flag}: the table says {shown}, the Config {fields[name]!r}"
             seen[script].append(name)
+    tutorials_variables = {  # clip_param, lam, gamma, tau, ... of tutorials 000-004
+        "ppo_cartpole.py": {"gamma", "lam", "clip_coef", "learning_rate", "update_epochs",
+                            "target_kl"},
+        "ppo_kl_cartpole.py": {"gamma", "lam", "d_targ", "kl_tolerance", "beta_init"},
+        "actor_critic_cartpole.py": {"gamma", "learning_rate", "num_steps"},
+        "ddpg_walker.py": {"gamma", "tau", "batch_size", "buffer_size", "actor_lr", "critic_lr",
+                           "expl_noise"}}
     for script, names in seen.items():
-        fields = [f.name for f in dataclasses.fields(configs[script])]
         twice = {name for name in names if names.count(name) > 1}
-        assert sorted(names) == sorted(fields), \
-            f"{script}: not in the tables {set(fields) - set(names)}, twice {twice}"
+        assert not twice, f"{script}: twice in the tables {twice}"
+        assert tutorials_variables[script] <= set(names), \
+            f"{script}: not in the tables {tutorials_variables[script] - set(names)}"
 
 
 def same(shown, default):
