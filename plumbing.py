@@ -168,7 +168,7 @@ class OutputFlags:
     """torch CPU threads (1 .. cores); the same seed gives the same logs only with the same
     count (threads change float sums)"""
     cuda: bool = False
-    """train on the GPU if there is one (not measured faster: DDPG on an H100 was not)"""
+    """train on the GPU if there is one (no large gain measured; other numbers per seed)"""
 
     def __post_init__(self):
         check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)

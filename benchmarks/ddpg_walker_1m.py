@@ -5,7 +5,7 @@ run's evaluations.csv into benchmarks/results/ddpg_walker_1m/seed<k>/ as it grow
 
     python benchmarks/ddpg_walker_1m.py start ~/ddpg-1m    # start or continue what is unfinished
     python benchmarks/ddpg_walker_1m.py status ~/ddpg-1m   # where each run is; copy the CSVs
-    python benchmarks/ddpg_walker_1m.py table              # the README table, from the copies
+    python benchmarks/ddpg_walker_1m.py table              # docs/results.md's table, from the copies
 
 The measure (as in the TD3 paper's ablation table): per seed, the mean of the last 10
 evaluations (each the mean return of 10 episodes without exploration noise); over the seeds,
@@ -135,7 +135,7 @@ def table():
 
 
 def summary(finals):
-    """'Over the 5 seeds at 1M: mean 1990, standard error 320' (or how many are there yet)."""
+    """'Over the N seeds at 1M: mean M, standard error S' (or how many are there yet)."""
     if len(finals) < 2:
         return f"{len(finals)} of {len(SEEDS)} runs have reached 1M steps: no mean yet"
     mean = sum(finals) / len(finals)
@@ -148,7 +148,7 @@ def summary(finals):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("action", choices=("start", "status", "table"))
-    parser.add_argument("parent", nargs="?", type=Path, help="folder of the three run folders")
+    parser.add_argument("parent", nargs="?", type=Path, help="folder of the five run folders")
     args = parser.parse_args()
     if args.action != "table" and args.parent is None:
         parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m")

@@ -4,7 +4,7 @@ The TD target r + gamma * not_done * Q'(s', mu'(s')) uses slow copies of the cri
 actor, moved toward them by soft_update with rate tau after every step. tau = 1 copies the
 networks whole each step: no target networks, the critic chases a target that moves with every
 one of its own updates. The TD3 paper (Fujimoto et al. 2018, Figure 3) shows the value
-estimate then diverging on MuJoCo tasks. The variants are the setting the script already has
+estimate then unstable, on Hopper-v1. The variants are the setting the script already has
 (--tau): the script's default 0.005 against 1, with the README's DDPG-in-minutes settings
 otherwise. What to look for: the evaluation return, and the critic's estimate Q(s, mu(s)) on
 the evaluation states beside the discounted return mu really obtained from them (logged in
