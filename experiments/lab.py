@@ -106,13 +106,15 @@ def report(name, curves, solved=475.0, what="mean return of the last 20 episodes
                             f"{column}_min": float(values.min()),
                             f"{column}_max": float(values.max())})
             rows.append(row)
-    for column, label, _ in panels:
-        print(f"\n{label}: median over every point of every seed [min, max]")
-        for variant, runs in curves.items():
-            values = np.concatenate([kept[column][1] for _, _, kept in runs])
-            values = values[np.isfinite(values)]
-            print(f"{variant:40} {np.median(values):10.4g} [{values.min():.4g}, "
-                  f"{values.max():.4g}]")
+    for column, label, _ in panels:  # the numbers the CSV holds, summarized over the seeds
+        print(f"\n{label}: each seed's median over the run, their median [min, max]; "
+              "the smallest and largest value of any seed")
+        for variant in curves:
+            seeds = [row for row in rows if row["variant"] == variant]
+            medians = [row[f"{column}_median"] for row in seeds]
+            print(f"{variant:40} {np.median(medians):10.4g} [{min(medians):.4g}, "
+                  f"{max(medians):.4g}]; {min(r[f'{column}_min'] for r in seeds):.4g} to "
+                  f"{max(r[f'{column}_max'] for r in seeds):.4g}")
     with open(OUT / f"{name}.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -172,6 +174,8 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     args = sys.argv[1:]
     if {"-h", "--help"} & set(args):
         print(sys.modules["__main__"].__doc__.strip())  # the experiment's question and what to see
+        print(f"\nWrites docs/experiments/{name}.png and {name}.csv (the committed ones; the "
+              "same numbers on the same machine); --quick writes to a temporary folder instead.")
         raise SystemExit(0)
     if args not in ([], ["--quick"]):
         print(f"error: unknown argument(s) {' '.join(args)}; the only option is --quick "
