@@ -20,9 +20,9 @@ after.gif; --eval and --watch replay a saved model (plumbing.play).
     python actor_critic_cartpole.py                  # train until solved (under a minute on a CPU)
     python actor_critic_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
-中文导读：A2C（优势演员-评论员）：一个共享隐藏层接演员和评论员两个头，每采一批数据就用
-n 步回报更新一次，不必等回合结束。配套教程：004《使用 actor-critic 方法来控制 CartPole-V0
-游戏》。train() 里的循环：采集数据、算 n 步回报和优势、更新、记录（含平滑回报）。
+中文导读：A2C（优势演员-评论员）：一个共享隐藏层接演员和评论员两个头，每采集一批数据就用
+n 步回报更新一次，不必等回合结束。配套教程：004，对照阅读见 README.zh-CN.md 的路线四。
+train() 里的循环：采集数据、算 n 步回报和优势、更新、记录（含平滑回报）。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)

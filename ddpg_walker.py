@@ -22,9 +22,9 @@ from which --resume continues the very same run (plumbing.py writes them all).
     python ddpg_walker.py --resume runs/<run>     # continue a stopped or killed run exactly
     python ddpg_walker.py --eval runs/<run>/best.pt --watch   # replay a saved actor
 
-中文导读：DDPG，连续动作的演员-评论员方法：确定性策略 mu(s)、经验回放、目标网络和软更新、
-高斯探索噪声。配套教程：003《【PyTorch深度强化学习】DDPG算法的讲解及实战(超详细 附源码)》。
-train() 里的循环：行动（先随机预热）、存储（时间截断不算终止）、学习、每 eval_every 步评估。
+中文导读：DDPG，连续动作的演员-评论员方法：确定性策略 μ(s)、经验回放、目标网络和软更新、
+高斯探索噪声。配套教程：003《【PyTorch深度强化学习】DDPG算法的讲解及实战(超详细 附源码)》，
+对照阅读见 README.zh-CN.md 的路线三。train() 里的循环：行动、存储、学习、定期评估。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)

@@ -17,8 +17,8 @@ after.gif; --eval and --watch replay a saved model (plumbing.play).
     python ppo_kl_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
 中文导读：PPO-penalty（近端策略优化的 KL 惩罚版本，教程里叫 PPO1）：把 KL 散度作为惩罚项
-放进目标函数，每次更新后按 KL 的大小把惩罚系数 β 减半或加倍。配套教程：001《强化学习PPO
-从理论到代码详解(2)---PPO1和PPO2》和 002。train() 里的循环：采集、算优势、更新、调整 β、记录。
+放进目标函数，每次更新后按 KL 的大小把惩罚系数 β 减半或加倍。配套教程：001 和 002，对照阅读
+见 README.zh-CN.md 的路线二。train() 里的循环：采集数据、算优势、更新、调整 β、记录。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
