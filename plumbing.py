@@ -154,7 +154,7 @@ class OutputFlags:
     """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
     names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
     eval_episodes: int = 10
-    """episodes of each evaluation (after training, and with --eval)"""
+    """episodes of each evaluation (DDPG: each one; CartPole: the checks and the last; --eval)"""
     eval_seed: int = 10_000
     """seed of the evaluation env (and its action draws), kept apart from the training seed"""
     watch: bool = False
@@ -168,7 +168,7 @@ class OutputFlags:
     """torch CPU threads (1 .. cores); the same seed gives the same logs only with the same
     count (threads change float sums)"""
     cuda: bool = False
-    """train on the GPU if there is one (no large gain measured; other numbers per seed)"""
+    """train on the GPU if there is one (its gain is unmeasured; other numbers per seed)"""
 
     def __post_init__(self):
         check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)

@@ -1,7 +1,7 @@
 """Question: what if the vector env's autoreset step is not masked? (PPO on CartPole-v1)
 
-gymnasium 1.x's vector envs reset an env one step after its episode ended: that step's
-action is ignored, its reward is 0, and the obs it returns starts the new episode. The
+gymnasium 1.x's vector envs (default NEXT_STEP mode) reset an env one step after it ended:
+that step's action is ignored, its reward is 0, and its obs starts the new episode. The
 original RolloutBuffer marks it (valid = False) and the update drops it. The variant below
 stores it as an ordinary transition: an action that did nothing is credited with what the
 next episode brings, and the final obs of one episode is paired with the first of the next.
