@@ -130,7 +130,7 @@ def test_zh_readme_uses_one_word_per_term():
     for zh, en in (("回合", "episode"), ("回报", "return"), ("裁剪", "clip"),
                    ("截断", "truncated"), ("终止", "terminated"), ("折扣因子", "discount factor"),
                    ("自举", "bootstrap"), ("熵", "entropy"), ("奈特", "nat"),
-                   ("经验回放", "replay buffer"), ("重要性采样", "importance sampling"),
+                   ("回放缓冲区", "replay buffer"), ("重要性采样", "importance sampling"),
                    ("广义优势估计", "GAE")):
         first = prose.index(zh) + len(zh)
         assert prose[first:first + len(en) + 1] == f"（{en}", f"first {zh} is not {zh}（{en}"
