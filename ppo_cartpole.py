@@ -14,10 +14,10 @@ after.gif; --eval and --watch replay a saved model (plumbing.play).
     python ppo_cartpole.py                  # train until solved (tens of seconds on a CPU)
     python ppo_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
 
-中文导读：PPO-clip（近端策略优化的裁剪版本，教程里叫 PPO2），同策略算法。配套教程：000《PPO
-近段策略优化玩cartpole游戏》（“近段”应为“近端”）、001《强化学习PPO从理论到代码详解(2)---PPO1
-和PPO2》和 002（原文无标题）。对照阅读见 README.zh-CN.md 的路线一、路线二。train() 里的循环
-四步：采集数据、算优势（GAE）、更新、记录。
+中文导读：PPO-clip（近端策略优化的裁剪版本，教程里叫 PPO2），同策略算法。配套教程：
+000《PPO近段策略优化玩cartpole游戏》（“近段”应为“近端”）、
+001《强化学习PPO从理论到代码详解(2)---PPO1和PPO2》和 002（原文无标题）。对照阅读见
+README.zh-CN.md 的路线一、路线二。train() 里的循环四步：采集数据、算优势（GAE）、更新、记录。
 """
 
 import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
