@@ -79,6 +79,9 @@ def shares(path):
 
 
 def main():
+    if {"-h", "--help"} & set(sys.argv[1:]):
+        print(__doc__.strip())
+        return
     print(f"{'script':26} {'lines':>5} {'non-blank':>9} {'algorithm':>10} {'hyperparams':>11} "
           f"{'plumbing':>9} {'train()':>8}")
     for name in sys.argv[1:] or SCRIPTS:

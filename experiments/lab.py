@@ -168,8 +168,8 @@ def band(ax, runs, color, label=None):
 def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=475.0,
          what="mean return of the last 20 episodes", quick_budget=2048, panels=(), **settings):
     """python experiments/<name>.py [--quick]: every variant over `seeds` at `budget` steps,
-    then the table and the figure in docs/experiments/. --quick: one seed, 2048 steps, the
-    table only (a smoke test; the tests run it)."""
+    then the table and the figure in docs/experiments/. --quick: one seed, `quick_budget` steps
+    (2048 for CartPole, 2500 for DDPG), the figure in a temporary folder (the tests run it)."""
     global OUT
     args = sys.argv[1:]
     if {"-h", "--help"} & set(args):

@@ -1,6 +1,6 @@
 """Question: what if a time limit is treated as the episode's end? (PPO on CartPole-v1)
 
-CartPole-v1 stops every episode at 500 steps. That is a truncation: the pole was still up,
+CartPole-v1 stops any episode that reaches 500 steps: a truncation, the pole still up,
 and the state had a future. The original GAE (common.gae) bootstraps from V(final obs)
 there; the variant below, the bug of many hand-written loops (and an open question in
 CleanRL's issues), treats it like a termination: no future, a value target of about 0 for
