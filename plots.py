@@ -376,10 +376,7 @@ def compare_figure(run_dirs):
 
 def compare(run_dirs, out):
     """Write compare.png (see compare_figure) to `out`; returns `out`."""
-    fig = compare_figure(run_dirs)
-    fig.savefig(out, dpi=90)
-    pyplot().close(fig)
-    return out
+    return save_whole(pyplot(), compare_figure(run_dirs), out, dpi=90)
 
 
 def compare_maps(run_dirs, out):
@@ -398,9 +395,7 @@ def compare_maps(run_dirs, out):
         map_panels(fig, grid[row, 0], {"trained": dict(
             angle=m["angle"], velocity=m["velocity"], value=m["trained_value"],
             right=m["trained_right"])}, title=script)
-    fig.savefig(out, dpi=72)
-    plt.close(fig)
-    return out
+    return save_whole(plt, fig, out, dpi=72)
 
 
 def main(argv=None):

@@ -656,15 +656,15 @@ class Run:
                       flush=True)
             inside_drawn = self.draw_inside()  # drawn aside while the evaluation runs
         try:
-            self._evaluate_and_draw(result)
+            self._evaluate_and_draw(result, elapsed)
         finally:
             inside_drawn()  # a Ctrl-C too waits for inside.png (a second or less)
         return result
 
-    def _evaluate_and_draw(self, result):
-        """finish(), after curve.png: TensorBoard, the two evaluations, the GIFs."""
+    def _evaluate_and_draw(self, result, elapsed):
+        """finish(), after curve.png: TensorBoard (steps/s over the `elapsed` seconds of
+        training), the two evaluations into `result`, the GIFs."""
         cfg, run_dir, step = self.cfg, self.dir, self.global_step
-        elapsed = time.time() - self.start_time
         if cfg.tensorboard:
             plots.to_tensorboard(run_dir, sps=step / elapsed)
         # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
@@ -683,7 +683,6 @@ class Run:
                 ret = common.record_gif(cfg.env_id, common.pi_actions(net, self.device, seed),
                                         run_dir / name, seed, every=2, scale=2)
                 print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
-        return result
 
 
 def saved_model(result):

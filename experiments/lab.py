@@ -85,8 +85,9 @@ def report(name, curves, solved=475.0, what="mean return of the last 20 episodes
     """Print and save (docs/experiments/<name>.csv) per variant: the final value (`what`) and
     the first step it reached `solved`, each as median [min, max] over seeds; draw
     docs/experiments/<name>.png: the median curve and the band of the seeds. panels: (column,
-    label, log) of kept columns, each printed (median over all updates or evaluations of all
-    seeds, and its min and max) and drawn below, the same way."""
+    label, log) of kept columns: each seed's median, min and max of it go into the CSV; printed,
+    the median [min, max] of the seeds' medians and the extremes of any seed; drawn below, the
+    same way as the curve."""
     OUT.mkdir(parents=True, exist_ok=True)
     rows = []
     print(f"\n{'variant':40} {'final':>26} {'steps to ' + str(int(solved)):>28}")

@@ -10,6 +10,7 @@ import torch
 import common
 import ppo_cartpole
 from conftest import ROOT, run_script
+from test_ppo_cartpole import batch
 
 sys.path.insert(0, str(ROOT / "experiments"))
 import advantage_normalization  # noqa: E402
@@ -121,7 +122,7 @@ def test_time_limit_wrapper_changes_only_terminated_and_only_at_the_truncation()
 def test_loss_without_clip_is_the_clipped_loss_with_an_infinite_band():
     """The no-clip variant: the same loss and gradient as compute_loss_pi with eps so large
     that no ratio leaves the band; with eps = 0.2 and ratios outside it, a different one."""
-    policy, _, data = ppo_batch()
+    policy, _, data = batch(40)
     with torch.no_grad():
         for p in policy.parameters():
             p.add_(0.5 * torch.randn_like(p))  # pi moved: some ratios leave [0.8, 1.2]
@@ -152,7 +153,7 @@ def test_measured_update_is_the_update_plus_three_numbers_it_only_reads(script):
     cfg = module.Config()
     results = []
     for update in (module.ppo_update, clip_or_penalty.measured(module.ppo_update)):
-        policy, value_net, data = ppo_batch()
+        policy, value_net, data = batch(40)
         with torch.no_grad():
             data["logits_old"] = policy(data["obs"])  # ppo_kl_cartpole's exact KL needs it
         opt = torch.optim.Adam([*policy.parameters(), *value_net.parameters()], lr=0.01)
@@ -201,16 +202,6 @@ def test_a_variant_may_run_another_script_and_keep_its_log_columns(tmp_path, mon
     rows = (tmp_path / "x.csv").read_text().splitlines()
     assert rows[0] == "variant,seed_index,final,steps_to_solved,lr_median,lr_min,lr_max"
     assert (tmp_path / "x.png").stat().st_size > 0
-
-
-def ppo_batch(B=40):
-    torch.manual_seed(0)
-    policy, value_net = ppo_cartpole.PolicyNetwork(4, 2, 8), ppo_cartpole.ValueNetwork(4, 8)
-    obs, act = torch.randn(B, 4), torch.randint(0, 2, (B,))
-    with torch.no_grad():
-        logp = torch.distributions.Categorical(logits=policy(obs)).log_prob(act)
-    return policy, value_net, dict(obs=obs, act=act, logp=logp, adv=torch.randn(B),
-                                   ret=torch.randn(B))
 
 
 def test_swapped_puts_the_original_back_even_after_an_error():
