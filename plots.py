@@ -139,7 +139,7 @@ def draw_inside(run_dir, script, cfg, kept=None, maps=None):
     fig = plt.figure(figsize=(12, height))
     grid = fig.add_gridspec(rows, 4, hspace=0.55, wspace=0.45, left=0.06, right=0.97,
                             top=1 - 0.5 / height, bottom=0.55 / height)
-    if script == "ddpg_walker":
+    if (run_dir / "evaluations.csv").exists():  # DDPG and TD3
         overestimation(fig.add_subplot(grid[0, :]), read_csv(run_dir / "evaluations.csv"))
     else:
         progress = read_csv(run_dir / "progress.csv")

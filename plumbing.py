@@ -824,7 +824,7 @@ class CheckpointedRun:
                         self.cfg.eval_every)
             print(f"curve.png there is redrawn at every evaluation: once in the warm-up, then "
                   f"from step {first} on, every {self.cfg.eval_every} steps", flush=True)
-            shipped = Path(__file__).resolve().parent / "docs" / "ddpg_walker2d.pt"
+            shipped = Path(__file__).resolve().parent / "docs" / f"{self.script}2d.pt"
             if self.cfg.env_id == "Walker2d-v5" and shipped.exists():
                 print(f"meanwhile, a trained walker (a 1M-step run's best actor): python "
                       f"{self.script}.py --eval {shipped} --gif walker.gif (or --watch)", flush=True)
@@ -995,8 +995,8 @@ class CheckpointedRun:
             print(f"interrupted at step {global_step}; {where} (before.gif and after.gif come "
                   f"when a run finishes; best.gif shows its best evaluation so far)", flush=True)
             return result
-        print(f"learning phase: {learned} steps at {rate:.1f} steps/s (one critic and one actor "
-              f"update per step, evaluations included); run folder: {self.dir}", flush=True)
+        print(f"learning phase: {learned} steps at {rate:.1f} steps/s (updates and evaluations "
+              f"included); run folder: {self.dir}", flush=True)
         if self.cfg.gifs:
             for name, net in (("before.gif", untrained), ("after.gif", self.nets["actor"])):
                 ret = common.record_gif(self.cfg.env_id, common.deterministic(net, self.device),

@@ -1,11 +1,13 @@
-"""The headline DDPG measurement: ddpg_walker.py at its defaults (Walker2d-v5, 1M steps) on
-seeds 0 to 4, one torch thread each. A run takes hours, so this starts the runs in the
-background, continues any that stopped (--resume: the same run, exactly), and copies each
-run's evaluations.csv into benchmarks/results/ddpg_walker_1m/seed<k>/ as it grows.
+"""The headline DDPG and TD3 measurement: ddpg_walker.py (or td3_walker.py, --script) at its
+defaults (Walker2d-v5, 1M steps) on seeds 0 to 4, one torch thread each. A run takes hours,
+so this starts the runs in the background, continues any that stopped (--resume: the same
+run, exactly), and copies each run's evaluations.csv into
+benchmarks/results/<script>_1m/seed<k>/ as it grows.
 
     python benchmarks/ddpg_walker_1m.py start ~/ddpg-1m    # start or continue what is unfinished
     python benchmarks/ddpg_walker_1m.py status ~/ddpg-1m   # where each run is; copy the CSVs
     python benchmarks/ddpg_walker_1m.py table              # docs/results.md's table, from the copies
+    python benchmarks/ddpg_walker_1m.py start ~/td3-1m --script td3_walker --seeds 0 1
 
 The measure (as in the TD3 paper's ablation table): per seed, the mean of the last 10
 evaluations (each the mean return of 10 episodes without exploration noise); over the seeds,
@@ -23,14 +25,15 @@ from pathlib import Path
 import torch
 
 ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results" / "ddpg_walker_1m"
+SCRIPT = "ddpg_walker"  # or td3_walker (--script)
+RESULTS = ROOT / "benchmarks" / "results" / f"{SCRIPT}_1m"
 SEEDS, BUDGET = (0, 1, 2, 3, 4), 1_000_000
 MILESTONES = (100_000, 300_000, 500_000, 1_000_000)
 
 
 def run_of(parent, seed):
     """The run folder of `seed` under `parent` (the newest, if several), or None."""
-    runs = sorted(Path(parent).glob(f"ddpg_walker__Walker2d-v5__seed{seed}__*"))
+    runs = sorted(Path(parent).glob(f"{SCRIPT}__Walker2d-v5__seed{seed}__*"))
     return runs[-1] if runs else None
 
 
@@ -50,9 +53,9 @@ def saved_step(run):
     return torch.load(ckpt, weights_only=True, mmap=True)["global_step"] if ckpt and ckpt.exists() else 0
 
 
-def start(parent):
+def start(parent, seeds=SEEDS):
     parent.mkdir(parents=True, exist_ok=True)
-    for seed in SEEDS:
+    for seed in seeds:
         run = run_of(parent, seed)
         if running(parent, seed):
             print(f"seed {seed}: running ({run})")
@@ -69,7 +72,7 @@ def start(parent):
         how = ["--resume", str(run)] if step else ["--seed", str(seed), "--run-dir", str(parent)]
         log = open(parent / f"seed{seed}.log", "a")
         # nice: other work on the machine comes first; the runs use what is left.
-        proc = subprocess.Popen(["nice", "-n", "19", sys.executable, str(ROOT / "ddpg_walker.py"),
+        proc = subprocess.Popen(["nice", "-n", "19", sys.executable, str(ROOT / f"{SCRIPT}.py"),
                                  *how], stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,
                                 start_new_session=True)
         try:  # Linux groups a new session's processes: nice must be set for the group too
@@ -146,13 +149,18 @@ def summary(finals):
 
 
 def main():
+    global SCRIPT, RESULTS
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("action", choices=("start", "status", "table"))
     parser.add_argument("parent", nargs="?", type=Path, help="folder of the five run folders")
+    parser.add_argument("--script", default=SCRIPT, choices=("ddpg_walker", "td3_walker"))
+    parser.add_argument("--seeds", type=int, nargs="+", default=SEEDS,
+                        help="start: only these seeds (the others wait for a later start)")
     args = parser.parse_args()
+    SCRIPT, RESULTS = args.script, ROOT / "benchmarks" / "results" / f"{args.script}_1m"
     if args.action != "table" and args.parent is None:
         parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m")
-    {"start": lambda: start(args.parent), "status": lambda: status(args.parent), "table": table}[
+    {"start": lambda: start(args.parent, args.seeds), "status": lambda: status(args.parent), "table": table}[
         args.action]()
 
 

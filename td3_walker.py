@@ -1,0 +1,355 @@
+"""TD3 on MuJoCo Walker2d-v5 (Fujimoto et al. 2018, "Addressing Function Approximation Error
+in Actor-Critic Methods"): DDPG (ddpg_walker.py) with three fixes for its overestimation.
+
+Read after ddpg_walker.py; `diff ddpg_walker.py td3_walker.py` shows the three fixes:
+  1. clipped double Q: two critics, and the TD target takes the smaller of their targets'
+     estimates (td_target);
+  2. delayed policy updates: the actor and all targets move once per policy_delay critic
+     updates (the loop's learn step);
+  3. target policy smoothing: the target action mu'(s') gets clipped noise (update_critics).
+The rest is DDPG's, at the same settings. The loop in train(), top to bottom:
+
+    act      random for start_steps steps, then mu(s) + Gaussian noise
+    store    (s, a, r, s', terminated) in the replay buffer; a time-limit
+             truncation is NOT terminal, so its target still bootstraps
+    learn    one step of both critics on a random minibatch; every policy_delay steps
+             also one actor step, then the targets move a fraction tau toward the networks
+    evaluate every eval_every steps (once only during the warm-up): 10 episodes of mu(s)
+             without noise
+
+The run folder keeps evaluations.csv, episodes.csv, model.pt, best.pt and best.gif (the
+best evaluation so far) and curve.png, and every checkpoint_every steps a checkpoint.pt
+from which --resume continues the very same run (plumbing.py writes them all).
+
+    python td3_walker.py                          # 1M steps: a few hours on a CPU
+    python td3_walker.py --resume runs/<run>      # continue a stopped or killed run exactly
+    python td3_walker.py --eval runs/<run>/best.pt --watch    # replay a saved actor
+
+中文导读：TD3（双延迟深度确定性策略梯度）是在 DDPG 上加的三处修改，用来抑制 DDPG 评论员对
+Q 值的高估：一、裁剪双 Q 学习：两个评论员，TD 目标取两个目标评论员估计中较小的一个；
+二、延迟策略更新：评论员每更新 policy_delay 次，演员和目标网络才更新一次；三、目标策略
+平滑：计算目标时给 μ'(s') 加上截断的高斯噪声。其余部分与 ddpg_walker.py 相同，建议先读
+DDPG（教程 003 与 README.zh-CN.md 的路线三），再用 diff 对照这三处修改。
+"""
+
+import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
+
+import copy
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+import common
+
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+
+
+# ==== Networks ============================================================================
+
+
+class Actor(nn.Module):
+    """mu(s): observation -> action, squashed by tanh into the action box."""
+
+    def __init__(self, obs_dim, act_dim, hidden, low, high):
+        super().__init__()
+        self.l1 = nn.Linear(obs_dim, hidden)
+        self.l2 = nn.Linear(hidden, hidden)
+        self.l3 = nn.Linear(hidden, act_dim)
+        # tanh gives [-1, 1]; scale and shift it onto [low, high] (Walker2d: [-1, 1] already).
+        self.register_buffer("scale", torch.as_tensor((high - low) / 2, dtype=torch.float32))
+        self.register_buffer("bias", torch.as_tensor((high + low) / 2, dtype=torch.float32))
+
+    def forward(self, obs):
+        a = F.relu(self.l1(obs))
+        a = F.relu(self.l2(a))
+        return self.bias + self.scale * torch.tanh(self.l3(a))
+
+
+class Critic(nn.Module):
+    """Q(s, a), as DDPG's: the action joins at the second layer. TD3 trains two of them."""
+
+    def __init__(self, obs_dim, act_dim, hidden):
+        super().__init__()
+        self.l1 = nn.Linear(obs_dim, hidden)
+        self.l2 = nn.Linear(hidden + act_dim, hidden)
+        self.l3 = nn.Linear(hidden, 1)
+
+    def forward(self, obs, action):
+        q = F.relu(self.l1(obs))
+        q = F.relu(self.l2(torch.cat([q, action], dim=-1)))
+        return self.l3(q).squeeze(-1)  # (B,): squeeze so Q never broadcasts against (B,) targets
+
+
+# ==== Hyperparameters: each once, here; --help shows the string under each =============
+
+
+@dataclass
+class Config(plumbing.CheckpointFlags):
+    """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
+    --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and --checkpoint-every and
+    --resume come from plumbing.CheckpointFlags."""
+    # --- experiment ---
+    env_id: str = "Walker2d-v5"
+    """gymnasium id of a MuJoCo env with Box actions (Walker2d-v5, Hopper-v5, HalfCheetah-v5,
+    InvertedPendulum-v5, ...)"""
+    seed: int = 0
+    """seeds torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
+    total_timesteps: int = 1_000_000
+    """env steps to train for (the tutorial and the TD3 paper: 1M)"""
+    start_steps: int = 25_000
+    """uniformly random actions for this many steps before the actor acts and learning
+    starts (the TD3 authors' code: 25k; their paper: 1k on Walker2d; at least batch_size)"""
+    # --- DDPG's settings ---
+    expl_noise: float = 0.1
+    """std of the Gaussian exploration noise, as a fraction of the action range's half-width
+    (0.1 .. 0.3)"""
+    batch_size: int = 256
+    """transitions per update (64 .. 256; DDPG paper: 64; the TD3 authors' OurDDPG.py: 256)"""
+    gamma: float = 0.99
+    """discount factor (0.98 .. 0.995)"""
+    tau: float = 0.005
+    """target networks move this fraction toward the networks after every update (0.001 .. 0.01)"""
+    actor_lr: float = 3e-4
+    """Adam step size of the actor (DDPG paper and tutorial: 1e-4; OurDDPG.py: 3e-4)"""
+    critic_lr: float = 3e-4
+    """Adam step size of the critic (DDPG paper and tutorial: 1e-3 with weight decay;
+    OurDDPG.py: 3e-4)"""
+    hidden: int = 256
+    """units in each of the two hidden layers (DDPG paper and tutorial: 400 and 300;
+    OurDDPG.py and CleanRL: 256)"""
+    buffer_size: int = 1_000_000
+    """replay buffer capacity; the oldest transitions are overwritten"""
+    eval_every: int = 5000
+    """evaluate mu(s) without noise (and save model.pt) every this many env steps; during the
+    random warm-up only once, as the untrained baseline (tutorial 003: 5000)"""
+    # --- TD3's three fixes (Fujimoto et al. 2018, the paper's defaults) ---
+    policy_delay: int = 2
+    """fix 2: the actor and the targets are updated once per this many critic updates
+    (1 = every step, as DDPG)"""
+    target_noise: float = 0.2
+    """fix 3: std of the Gaussian noise on the target action mu'(s'), as a fraction of the
+    action range's half-width (0 = none, as DDPG)"""
+    noise_clip: float = 0.5
+    """fix 3: that noise is clipped to +- this (same units)"""
+
+    def __post_init__(self):
+        plumbing.check_mujoco(self.env_id)  # first: other flags' limits matter less than that
+        super().__post_init__()  # the shared flags' checks
+        plumbing.check_ranges(
+            self, total_timesteps="> 0", batch_size="> 0", hidden="> 0", buffer_size="> 0",
+            eval_every="> 0", actor_lr="> 0", critic_lr="> 0", expl_noise=">= 0",
+            gamma="(0, 1]", tau="(0, 1]", policy_delay="> 0", target_noise=">= 0",
+            noise_clip=">= 0")
+        # The first update samples batch_size transitions: the warm-up must have stored that many.
+        plumbing.check(self.start_steps >= self.batch_size,
+                       f"--start-steps must be at least --batch-size ({self.batch_size}), "
+                       f"got {self.start_steps}")
+        plumbing.check(self.resume or self.total_timesteps > self.start_steps,
+                       f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
+                       f"({self.start_steps}): learning starts after the warm-up")
+
+
+# ==== Replay buffer and update ============================================================
+
+
+class ReplayBuffer:
+    """A ring of the last `max_size` transitions, a tensor per field, on the training device.
+
+    Kept as tensors where training runs, a minibatch is one index into each
+    field: no numpy -> torch conversion per batch, no copy to the GPU.
+    """
+
+    def __init__(self, obs_dim, act_dim, max_size, device):
+        self.obs = torch.zeros(max_size, obs_dim, device=device)       # s   (max_size, obs_dim)
+        self.action = torch.zeros(max_size, act_dim, device=device)    # a   (max_size, act_dim)
+        self.reward = torch.zeros(max_size, device=device)             # r   (max_size,)
+        self.next_obs = torch.zeros(max_size, obs_dim, device=device)  # s'  (max_size, obs_dim)
+        self.not_done = torch.zeros(max_size, device=device)           # 1 - terminated  (max_size,)
+        # as in tutorial 003: ptr, where the next transition goes; size, how many are stored
+        self.max_size, self.ptr, self.size = max_size, 0, 0
+
+    def add(self, obs, action, reward, next_obs, terminated):
+        i = self.ptr
+        self.obs[i] = torch.as_tensor(obs)
+        self.action[i] = torch.as_tensor(action)
+        self.reward[i] = float(reward)
+        self.next_obs[i] = torch.as_tensor(next_obs)
+        # not_done = 0 only when the episode really ended. A time-limit truncation keeps
+        # not_done = 1: the state was not terminal, so its target bootstraps from Q(s', mu(s')).
+        self.not_done[i] = 0.0 if terminated else 1.0
+        self.ptr = (self.ptr + 1) % self.max_size  # wrap around: overwrite the oldest
+        self.size = min(self.size + 1, self.max_size)
+
+    def sample(self, batch_size):
+        """A uniformly random minibatch of stored transitions:
+        obs (B, obs_dim), action (B, act_dim), reward (B,), next_obs (B, obs_dim), not_done (B,)."""
+        idx = torch.randint(0, self.size, (batch_size,), device=self.obs.device)
+        return (self.obs[idx], self.action[idx], self.reward[idx], self.next_obs[idx],
+                self.not_done[idx])
+
+
+@torch.no_grad()
+def soft_update(target, source, tau):
+    """theta' <- tau * theta + (1 - tau) * theta'  (Lillicrap et al. 2016, Algorithm 1)."""
+    for p_target, p in zip(target.parameters(), source.parameters()):
+        p_target.mul_(1 - tau).add_(tau * p)
+
+
+def td_target(reward, not_done, next_q1, next_q2, gamma):
+    """Fix 1, clipped double Q: y = r + gamma * min(Q1'(s', a~), Q2'(s', a~)), with no future
+    after a termination (not_done = 0)  (Fujimoto et al. 2018, eq. 10 and Algorithm 1). Each
+    critic's error pushes one way or the other; the smaller of the two pushes less upward."""
+    return reward + gamma * not_done * torch.min(next_q1, next_q2)
+
+
+def compute_loss_actor(actor, critic, obs):
+    """Deterministic policy gradient: grad J = mean grad_a Q1(s, a)|a=mu(s) * grad mu(s)
+    (Fujimoto et al. 2018, eq. 1 and Algorithm 1): the actor ascends the first critic alone."""
+    return -critic(obs, actor(obs)).mean()
+
+
+def update_critics(nets, batch, noise_scale, low, high, cfg):
+    """One step of both critics on a minibatch toward the clipped double-Q target."""
+    obs, action, reward, next_obs, not_done = batch
+    with torch.no_grad():  # targets are constants: no gradient flows into them
+        # Fix 3, target policy smoothing: a~ = clip(mu'(s') + clip(eps, -c, c), low, high),
+        # eps ~ N(0, sigma)  (Fujimoto et al. 2018, eq. 14 and Algorithm 1)
+        eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+        next_action = (nets["actor_target"](next_obs) + noise_scale * eps).clamp(low, high)
+        y = td_target(reward, not_done, nets["critic_target"](next_obs, next_action),
+                      nets["critic2_target"](next_obs, next_action), cfg.gamma)
+    # L = mean (y - Q1(s, a))^2 + mean (y - Q2(s, a))^2: both critics learn the same target
+    critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                   + F.mse_loss(nets["critic2"](obs, action), y))
+    nets["critic_opt"].zero_grad()
+    critic_loss.backward()
+    nets["critic_opt"].step()
+    return critic_loss.detach()
+
+
+def update_actor_and_targets(nets, obs, cfg):
+    """One actor step, then every target moves a fraction tau toward its network."""
+    actor_loss = compute_loss_actor(nets["actor"], nets["critic"], obs)
+    nets["actor_opt"].zero_grad()
+    # inputs=: gradients for the actor only; the critic's would be thrown away.
+    actor_loss.backward(inputs=list(nets["actor"].parameters()))
+    nets["actor_opt"].step()
+
+    soft_update(nets["critic_target"], nets["critic"], cfg.tau)
+    soft_update(nets["critic2_target"], nets["critic2"], cfg.tau)
+    soft_update(nets["actor_target"], nets["actor"], cfg.tau)
+    return actor_loss.detach()
+
+
+def build(obs_dim, act_dim, low, high, cfg, device):
+    """Actor, the two critics (critic is Q1, critic2 is Q2), their targets and optimizers."""
+    actor = Actor(obs_dim, act_dim, cfg.hidden, low, high).to(device)
+    critic = Critic(obs_dim, act_dim, cfg.hidden).to(device)
+    critic2 = Critic(obs_dim, act_dim, cfg.hidden).to(device)  # fix 1: its own initial weights
+    # The targets start equal to the networks, then lag behind them.
+    actor_target, critic_target = copy.deepcopy(actor), copy.deepcopy(critic)
+    critic2_target = copy.deepcopy(critic2)
+    # fused=True: torch's one-kernel Adam step for all parameters (a standard option).
+    actor_opt = torch.optim.Adam(actor.parameters(), lr=cfg.actor_lr, fused=True)
+    critic_opt = torch.optim.Adam([*critic.parameters(), *critic2.parameters()],
+                                  lr=cfg.critic_lr, fused=True)  # one step for both critics
+    return dict(actor=actor, critic=critic, critic2=critic2, actor_target=actor_target,
+                critic_target=critic_target, critic2_target=critic2_target,
+                actor_opt=actor_opt, critic_opt=critic_opt)
+
+
+# ==== Training ============================================================================
+
+
+def train(cfg: Config):
+    """Train TD3 with `cfg` (or continue the run cfg.resume). Returns a dict: run_dir, global_step,
+    evaluations, episodes, steps_per_second and interrupted (plumbing.CheckpointedRun.finish)."""
+    if cfg.resume:
+        cfg = plumbing.config_to_resume(cfg, SCRIPT)  # the saved run's settings
+    # --- seeding and setup ---
+    torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
+    torch.manual_seed(cfg.seed)  # the networks' init
+    device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
+    env = common.make_continuous_env(cfg.env_id)  # one env, as in the paper and tutorial 003
+    obs_dim, act_dim = int(env.observation_space.shape[0]), int(env.action_space.shape[0])
+    low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
+    nets = build(obs_dim, act_dim, low, high, cfg, device)
+    actor = nets["actor"]
+    untrained = copy.deepcopy(actor)  # before.gif is drawn from these weights after training
+    torch.manual_seed(cfg.seed)  # the noise and the minibatches: not shifted by the init
+    env.action_space.seed(cfg.seed)  # the random warm-up actions
+    buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
+    noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32,
+                                device=device)
+    low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
+    high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
+    half_width = torch.as_tensor((high - low) / 2, dtype=torch.float32, device=device)
+    obs, _ = env.reset(seed=cfg.seed)
+    # The run folder, its logs, models and checkpoints (plumbing: it never acts). checkpoint.pt
+    # holds all that decides what comes next: the six networks, both optimizers, the buffer,
+    # the random generators, the env mid-episode, the logs; --resume puts it all back.
+    run = plumbing.CheckpointedRun(SCRIPT, cfg, nets, buffer, env, device, obs_dim=obs_dim,
+                                   act_dim=act_dim, low=low.tolist(), high=high.tolist())
+    global_step, obs = run.start(obs)
+    first_step, losses = global_step, None
+    actor_loss = torch.tensor(0.0)  # shown in the progress line until the first actor step
+
+    with run.until_interrupted():  # Ctrl-C: the loop stops after its step, with a checkpoint
+        for global_step in range(first_step + 1, cfg.total_timesteps + 1):
+            learning = global_step > cfg.start_steps  # after the random warm-up
+            # --- act ---
+            if not learning:
+                action = env.action_space.sample()  # a random warm-up fills the buffer widely
+            else:
+                with torch.no_grad():
+                    a = actor(torch.as_tensor(obs, dtype=torch.float32, device=device))
+                    a = a + noise_std * torch.randn(act_dim, device=device)  # Gaussian noise
+                    action = torch.clamp(a, low_t, high_t).cpu().numpy()
+            next_obs, reward, terminated, truncated, info = env.step(action)
+
+            # --- store: with terminated, not truncated (see ReplayBuffer.add) ---
+            buffer.add(obs, action, reward, next_obs, terminated)
+            obs = next_obs  # the transition is stored; the next action starts from here
+            if terminated or truncated:
+                run.episode_ended(global_step, info["episode"]["r"])  # its return, episodes.csv
+                obs, _ = env.reset()
+
+            # --- learn: both critics every env step; fix 2, the actor and the targets only
+            # every policy_delay steps (Fujimoto et al. 2018, Algorithm 1: "if t mod d") ---
+            if learning:
+                batch = buffer.sample(cfg.batch_size)
+                critic_loss = update_critics(nets, batch, half_width, low_t, high_t, cfg)
+                if global_step % cfg.policy_delay == 0:
+                    actor_loss = update_actor_and_targets(nets, batch[0], cfg)
+                losses = (critic_loss, actor_loss)
+            run.print_progress(global_step, losses)  # every print_every steps; nan/inf: stop
+
+            # --- evaluate: mu(s) without noise, every eval_every steps (tutorial 003); during
+            # the random warm-up only the first time, as the untrained baseline ---
+            if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):
+                seen = []  # the evaluation's states and rewards: Q(s, mu(s)) against the return
+                returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
+                                          cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
+                run.log_evaluation(global_step, returns, seen)  # evaluations.csv, model.pt, curve
+            run.checkpoint_when_due(global_step, obs)  # every checkpoint_every steps
+            if run.ctrl_c_pressed:  # stop where the step is whole (its checkpoint is written)
+                break
+    env.close()
+    return run.finish(global_step, untrained)  # what was saved; before.gif and after.gif
+
+
+def main(argv=None):
+    """python td3_walker.py [flags]: train (then --watch), --resume a run, or --eval an actor."""
+    cfg = plumbing.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
+    with plumbing.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        saved = cfg.eval or plumbing.saved_model(train(cfg))  # after a Ctrl-C: exit 130
+        if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
+            plumbing.play(cfg, saved, SCRIPT, Actor, "actor")
+
+
+if __name__ == "__main__":
+    main()
