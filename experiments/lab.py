@@ -3,10 +3,16 @@ the difference as a table (median and spread over seeds) and a figure. A variant
 Config overrides and of code replaced for its runs only (`swap`: (object, attribute, new)),
 so the learning path of the scripts has no `if bug:` branch and no flag for it; a variant may
 also name another script (`script`), to set two algorithms side by side.
+
+Each (variant, seed) run is independent: with --workers N (default: one per core) N of them
+run at once, each in its own process with one torch thread, and give the very numbers that
+one after another in this process gives (every run seeds all it draws from).
 """
 
 import contextlib
 import csv
+import multiprocessing
+import os
 import statistics
 import sys
 import tempfile
@@ -20,7 +26,8 @@ sys.path.insert(0, str(ROOT))  # the scripts, when run as `python experiments/<n
 
 import plots  # noqa: E402
 
-OUT = ROOT / "docs" / "experiments"
+DOCS = ROOT / "docs" / "experiments"  # the committed figures and CSVs (--docs refreshes them)
+OUT = ROOT / "runs" / "experiments"  # where a learner's own run writes them
 # The README's DDPG-in-minutes settings (InvertedPendulum-v5, 20,000 steps), evaluated every
 # 2500 steps over 5 episodes: the DDPG experiments' task.
 DDPG_IN_MINUTES = dict(env_id="InvertedPendulum-v5", start_steps=1000, eval_every=2500,
@@ -41,31 +48,58 @@ def swapped(swaps):
             setattr(owner, name, old)
 
 
-def run(script, variants, seeds, budget, columns=(), **settings):
+def run(script, variants, seeds, budget, columns=(), workers=1, **settings):
     """{variant: [(steps, values, kept), one per seed]}: the train() of `script` (or of the
     variant's own "script") for each variant and seed, `budget` env steps, no solved stop, no
     GIFs. The values: the CartPole scripts' mean return of the last 20 episodes after each
     update; DDPG's evaluation returns. kept: {column: (steps, values)} for each of `columns`
-    in the run's log (progress.csv, or DDPG's evaluations.csv)."""
-    curves = {}
+    in the run's log (progress.csv, or DDPG's evaluations.csv). workers > 1: that many runs at
+    once, each in a process of its own (forked, so a swap made here is there too)."""
+    jobs = [(name, seed) for name in variants for seed in seeds]
     with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
-        for name, variant in variants.items():
-            curves[name] = []
-            module = variant.get("script", script)
-            for seed in seeds:
-                quiet = dict(seed=seed, total_timesteps=budget, gifs=False, curves=False,
-                             print_every=10**9, run_dir=str(Path(tmp) / f"{name}{seed}"))
-                if hasattr(module.Config, "stop_when_solved"):  # the CartPole scripts
-                    quiet.update(stop_when_solved=False, eval_episodes=1)
-                cfg = module.Config(**{**quiet, **settings, **variant.get("config", {})})
-                started = time.time()
-                with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
-                    result = module.train(cfg)
-                steps, values, _ = plots.curve_of(result["run_dir"])
-                curves[name].append((steps, values, kept_columns(result["run_dir"], columns)))
-                print(f"{name:40} seed {seed}: final {values[-1]:6.1f}"
-                      f"  ({time.time() - started:.0f} s)", flush=True)
-    return curves
+        task = (script, variants, budget, columns, settings, tmp)
+        if workers == 1 or len(jobs) == 1:
+            done = (one_run(task, job) for job in jobs)
+        else:  # a fresh process per run (maxtasksperchild=1): nothing carries from one to the next
+            global _TASK
+            _TASK = task
+            pool = multiprocessing.get_context("fork").Pool(min(workers, len(jobs)),
+                                                           maxtasksperchild=1)
+            done = pool.imap_unordered(_one_run_of_task, jobs)
+        results = {}
+        for job, curve, seconds in done:
+            results[job] = curve
+            print(f"{job[0]:40} seed {job[1]}: final {curve[1][-1]:6.1f}  ({seconds:.0f} s)",
+                  flush=True)
+        if workers > 1 and len(jobs) > 1:
+            pool.close()
+            pool.join()
+    return {name: [results[(name, seed)] for seed in seeds] for name in variants}
+
+
+def one_run(task, job):
+    """One (variant, seed) run of `task`: (job, (steps, values, kept), seconds)."""
+    script, variants, budget, columns, settings, tmp = task
+    name, seed = job
+    variant = variants[name]
+    module = variant.get("script", script)
+    quiet = dict(seed=seed, total_timesteps=budget, gifs=False, curves=False,
+                 print_every=10**9, run_dir=str(Path(tmp) / f"{name}{seed}"))
+    if hasattr(module.Config, "stop_when_solved"):  # the CartPole scripts
+        quiet.update(stop_when_solved=False, eval_episodes=1)
+    cfg = module.Config(**{**quiet, **settings, **variant.get("config", {})})
+    started = time.time()
+    with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
+        result = module.train(cfg)
+    steps, values, _ = plots.curve_of(result["run_dir"])
+    return job, (steps, values, kept_columns(result["run_dir"], columns)), time.time() - started
+
+
+_TASK = None  # run()'s task, for the forked workers
+
+
+def _one_run_of_task(job):
+    return one_run(_TASK, job)
 
 
 def kept_columns(run_dir, columns):
@@ -167,28 +201,38 @@ def band(ax, runs, color, label=None):
 
 
 def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=475.0,
-         what="mean return of the last 20 episodes", quick_budget=2048, panels=(), **settings):
-    """python experiments/<name>.py [--quick]: every variant over `seeds` at `budget` steps,
-    then the table and the figure in docs/experiments/. --quick: one seed, `quick_budget` steps
-    (2048 for CartPole, 2500 for DDPG), the figure in a temporary folder (the tests run it)."""
+         what="mean return of the last 20 episodes", quick_budget=2048, panels=(),
+         quick_settings=None, **settings):
+    """python experiments/<name>.py [--quick] [--docs] [--workers N]: every variant over
+    `seeds` at `budget` steps, then the table and the figure in runs/experiments/ (--docs:
+    docs/experiments/, the committed ones). --quick: one seed, `quick_budget` steps (2048 for
+    CartPole, 2500 for DDPG), the figure in a temporary folder (the tests run it)."""
     global OUT
-    args = sys.argv[1:]
+    args, workers = sys.argv[1:], os.cpu_count() or 1
     if {"-h", "--help"} & set(args):
         print(sys.modules["__main__"].__doc__.strip())  # the experiment's question and what to see
-        print(f"\nWrites docs/experiments/{name}.png and {name}.csv (the committed ones; the "
-              "same numbers on the same machine); --quick writes to a temporary folder instead.")
+        print(f"\nWrites runs/experiments/{name}.png and {name}.csv; --docs writes "
+              f"docs/experiments/{name}.png and .csv instead (the committed ones: the same "
+              "numbers on the same machine); --quick writes to a temporary folder. --workers N: "
+              f"N runs at once, one process and one torch thread each (default: one per core, "
+              f"here {workers}); the numbers do not depend on it.")
         raise SystemExit(0)
-    if args not in ([], ["--quick"]):
-        print(f"error: unknown argument(s) {' '.join(args)}; the only option is --quick "
-              "(see --help)", file=sys.stderr)
+    if "--workers" in args[:-1] and args[args.index("--workers") + 1].isdigit():
+        at = args.index("--workers")
+        workers, args = int(args[at + 1]), args[:at] + args[at + 2:]
+    if workers < 1 or not set(args) <= {"--quick", "--docs"} or len(set(args)) < len(args):
+        print(f"error: unknown argument(s) {' '.join(sys.argv[1:])}; the options are --quick, "
+              "--docs and --workers N (N >= 1; see --help)", file=sys.stderr)
         raise SystemExit(2)
-    quick = args == ["--quick"]
+    quick = "--quick" in args
     started = time.time()
-    if quick:
-        seeds, budget = seeds[:1], quick_budget
+    OUT = DOCS if "--docs" in args else OUT
+    if quick:  # quick_settings: overrides of `settings` that a quick budget needs
+        seeds, budget, settings = seeds[:1], quick_budget, {**settings, **(quick_settings or {})}
         OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
-    curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], **settings)
+    curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers,
+                 **settings)
     path = report(name, curves, solved, what, panels)
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
-          f"{time.time() - started:.0f} s; figure: {path}")
+          f"{time.time() - started:.0f} s with {workers} worker(s); figure: {path}")
     return curves

@@ -2,6 +2,7 @@
 code it replaces is put back after its runs, and each file runs in its quick mode."""
 
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,6 +21,7 @@ import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
 import target_networks  # noqa: E402
+import td3_fixes  # noqa: E402
 import truncation_as_termination  # noqa: E402
 import truncation_as_termination_ddpg  # noqa: E402
 
@@ -237,4 +239,36 @@ def test_help_prints_the_question_and_a_bad_argument_is_one_line():
     p = run_script("experiments/clip_or_penalty.py", "--qick", timeout=60)
     assert p.returncode == 2 and p.stdout == ""
     assert p.stderr.strip().splitlines() == [
-        "error: unknown argument(s) --qick; the only option is --quick (see --help)"]
+        "error: unknown argument(s) --qick; the options are --quick, --docs and --workers N "
+        "(N >= 1; see --help)"]
+
+
+def test_two_workers_give_the_same_csvs_byte_for_byte_as_one(tmp_path):
+    """lab.run with --workers 2 runs each (variant, seed) in its own process: the numbers must
+    be those of the runs one after another in one process."""
+    written = {}
+    for workers in (1, 2):
+        p = run_script("experiments/advantage_normalization.py", "--quick", "--workers",
+                       workers, timeout=300)
+        assert p.returncode == 0, p.stderr
+        folder = Path(p.stdout.rstrip().split("figure: ")[-1]).parent
+        assert f"with {workers} worker(s)" in p.stdout
+        written[workers] = (folder / "advantage_normalization.csv").read_bytes()
+    assert written[1] == written[2]
+
+
+def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
+    """Each single-fix variant keeps one fix and turns the other two off; the first none."""
+    import td3_walker
+
+    on = {}
+    for name, variant in td3_fixes.VARIANTS.items():
+        cfg = {**variant.get("config", {})}
+        on[name] = (not variant.get("swap"), cfg.get("policy_delay", 2) > 1,
+                    cfg.get("target_noise", 0.2) > 0)
+    assert list(on.values()) == [(False, False, False), (True, False, False),
+                                 (False, True, False), (False, False, True), (True, True, True)]
+    r, nd = torch.tensor([1.0, 2.0]), torch.tensor([1.0, 0.0])
+    q1, q2 = torch.tensor([5.0, 5.0]), torch.tensor([3.0, 9.0])
+    assert td3_fixes.td_target_of_q1_alone(r, nd, q1, q2, 0.5).tolist() == [3.5, 2.0]
+    assert td3_walker.td_target(r, nd, q1, q2, 0.5).tolist() == [2.5, 2.0]
