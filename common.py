@@ -7,6 +7,8 @@ may skip (flags, logs, checkpoints, Ctrl-C) is in plumbing.py.
 
 import plumbing  # first: headless rendering settings, before gymnasium loads pygame or MuJoCo
 
+import math
+
 import gymnasium as gym
 import numpy as np
 import torch
@@ -194,8 +196,9 @@ def ratio_stats(ratio, adv, clip_coef, normalize=True):
     The clip does not keep r inside [1 - eps, 1 + eps]. min(r A, clip(r) A) only goes flat
     on the side the advantage favours: for A > 0 once r > 1 + eps, for A < 0 once r < 1 - eps.
     Such a sample stops pulling pi further; the other samples, and the shared network, still
-    move it. On the same ratios clipfrac (|r - 1| > eps, either side) is larger. The sign of `adv`
-    is taken against the batch's mean when the update normalizes (per minibatch: approximate).
+    move it. clipfrac_after is clipfrac (|r - 1| > eps, either side) on these same ratios: never
+    below zero_grad_frac, except for samples with A = 0. The sign of `adv` is taken against the
+    batch's mean when the update normalizes (per minibatch: approximate).
 
     >>> r, a = torch.tensor([1.5, 1.5, 0.5, 0.5, 1.0]), torch.tensor([1., -1., 1., -1., 1.])
     >>> ratio_stats(r, a, 0.2, normalize=False)["zero_grad_frac"]  # samples 0 and 3
@@ -205,26 +208,48 @@ def ratio_stats(ratio, adv, clip_coef, normalize=True):
         adv = adv - adv.mean()  # the sign after normalization (the std does not change it)
     flat = ((adv > 0) & (ratio > 1 + clip_coef)) | ((adv < 0) & (ratio < 1 - clip_coef))
     stats = {key: torch.quantile(ratio, q).item() for key, q in QUANTILES.items()}
+    outside = (ratio - 1).abs() > clip_coef  # clipfrac's count, on these same ratios
     return dict(ratio_min=ratio.min().item(), **stats, ratio_max=ratio.max().item(),
-                zero_grad_frac=(flat | (adv == 0)).double().mean().item(), ratio=ratio, adv=adv)
+                zero_grad_frac=(flat | (adv == 0)).double().mean().item(), ratio=ratio, adv=adv,
+                clipfrac_after=outside.double().mean().item())
 
 
-def q_against_return(trajectories, actor, critic, gamma, device, horizon=500):
-    """DDPG's overestimation (Fujimoto et al. 2018, TD3, Fig. 1): the critic's estimate
-    Q(s, mu(s)) against the discounted return mu really obtained from s, both averaged over
-    the states of evaluation episodes. Returns (mean Q, mean return, number of states).
+def tail_horizon(gamma, tail=0.66, at_least=500):
+    """How many steps before a time-limit end a state needs, for q_against_return, so that the
+    return it cannot see past that end, at most gamma^H * r_max / (1 - gamma), stays under
+    `tail` * r_max: 500 up to gamma = 0.99 (0.99^500 / 0.01 = 0.66), more above (gamma =
+    0.995: 1140, so a 1000-step episode cut by the limit gives no state). gamma = 1: no
+    horizon is enough (inf): only terminated episodes count.
+
+    >>> tail_horizon(0.99), tail_horizon(0.995), tail_horizon(1.0)
+    (500, 1140, inf)
+    """
+    if gamma >= 1:
+        return math.inf
+    return max(at_least, math.ceil(math.log(tail * (1 - gamma)) / math.log(gamma)))
+
+
+def q_against_return(trajectories, actor, critic, gamma, device, horizon=None):
+    """DDPG's overestimation, after the TD3 paper's Figure 1 (Fujimoto et al. 2018): the
+    critic's estimate Q(s, mu(s)) against the discounted return mu really obtained from s,
+    both averaged over the states of evaluation episodes. Returns (mean Q, mean return,
+    number of states). A variant of the paper's measure: its rollouts start from states of
+    the replay buffer; ours are the evaluation episodes' own states, so Q is checked where
+    mu itself goes.
 
     Where an episode hit the time limit, its return past the limit is unseen. So only states
-    at least `horizon` steps before that end count: the unseen tail adds at most
-    gamma^horizon * r_max / (1 - gamma) to their return (0.99^500 = 0.0066, times 100 r_max:
-    under r_max; Walker2d's rewards per step are a few units). After a termination the
-    future really is 0 and every state counts."""
+    at least `horizon` (default: tail_horizon(gamma)) steps before that end count: the unseen
+    tail then adds at most 0.66 times a step's largest reward to their return (Walker2d's
+    rewards per step are a few units). After a termination the future really is 0 and every
+    state counts."""
+    horizon = tail_horizon(gamma) if horizon is None else horizon
     states, targets = [], []
     for episode in trajectories:
         rewards, g = episode["rewards"], 0.0
         returns = np.zeros(len(rewards))
         for t in reversed(range(len(rewards))):  # G_t = r_t + gamma * G_{t+1}
             g = returns[t] = rewards[t] + gamma * g
+        # gamma = 1: horizon inf, no bound on the unseen tail: no state of a cut episode counts
         keep = len(rewards) if episode["terminated"] else max(len(rewards) - horizon, 0)
         states.append(episode["obs"][:keep])
         targets.append(returns[:keep])

@@ -177,9 +177,13 @@ def ratio_panels(fig, grid, progress, kept, eps):
     ax.set_xlabel("env steps")
     ax.legend(fontsize=7, loc="upper right")
     ax = fig.add_subplot(grid[0, 2:])
-    ax.plot(x, progress["clipfrac"], color="C3", lw=1, label="clipfrac: |r - 1| > eps")
+    ax.plot(x, progress["clipfrac"], color="C3", lw=0.8, ls=":",
+            label="clipfrac: |r - 1| > eps, during the update")
+    if "clipfrac_after" in progress:  # the same ratios as zero_grad_frac: after the update
+        ax.plot(x, progress["clipfrac_after"], color="C3", lw=1,
+                label="clipfrac after the update")
     ax.plot(x, progress["zero_grad_frac"], color="C2", lw=1,
-            label="no policy gradient (clip binds on A's side)")
+            label="no policy gradient after it (clip binds on A's side)")
     ax.set_title("share of the batch", fontsize=9)
     ax.set_xlabel("env steps")
     ax.legend(fontsize=7)

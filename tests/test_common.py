@@ -231,7 +231,16 @@ def test_ratio_stats_match_numpy_and_the_gradient_itself():
     (grad,) = torch.autograd.grad(terms.sum(), logp)  # d term_i / d log pi(a_i|s_i)
     assert stats["zero_grad_frac"] == pytest.approx((grad == 0).float().mean().item())
     clipfrac = ((ratio.detach() - 1).abs() > 0.2).float().mean().item()
+    assert stats["clipfrac_after"] == pytest.approx(clipfrac)  # on the very same ratios
     assert 0 < stats["zero_grad_frac"] < clipfrac  # the clip binds on one side only
+
+
+def test_clipfrac_after_and_zero_grad_frac_by_hand():
+    """r = 1.5, 1.5, 0.5, 0.5, 1.0 with A = +, -, +, -, +: four ratios outside [0.8, 1.2]
+    (clipfrac 0.8), of which two on the side their advantage favours (zero gradient 0.4)."""
+    r, a = torch.tensor([1.5, 1.5, 0.5, 0.5, 1.0]), torch.tensor([1., -1., 1., -1., 1.])
+    stats = common.ratio_stats(r, a, 0.2, normalize=False)
+    assert (stats["clipfrac_after"], stats["zero_grad_frac"]) == (0.8, 0.4)
 
 
 def test_q_against_return_is_the_critic_on_those_states_and_an_explicit_sum():
@@ -250,6 +259,27 @@ def test_q_against_return_is_the_critic_on_those_states_and_an_explicit_sum():
         x = torch.as_tensor(states, dtype=torch.float32)
         want_q = critic(x, actor(x)).mean().item()
     assert n == 10 and g == pytest.approx(np.mean(returns)) and q == pytest.approx(want_q, rel=1e-5)
+
+
+@pytest.mark.parametrize("gamma", [0.99, 0.995])
+def test_q_against_return_bounds_the_unseen_tail_as_documented(gamma):
+    """An episode cut by the time limit after 3000 steps of reward 1 (the largest): from a
+    state that counts, the true return 1/(1 - gamma) exceeds the one summed to the cut by at
+    most 0.66 (the docstring's bound); the states closer to the cut than tail_horizon are
+    left out; gamma = 1 keeps no state of a cut episode, and all of a terminated one."""
+    steps = 3000
+    cut = dict(obs=np.zeros((steps, 1)), rewards=np.ones(steps), terminated=False)
+    actor, critic = torch.nn.Linear(1, 1), lambda obs, action: obs.sum(-1)  # noqa: E731
+    _, g, n = common.q_against_return([cut], actor, critic, gamma, "cpu")
+    assert n == steps - common.tail_horizon(gamma)
+    true, h = 1 / (1 - gamma), common.tail_horizon(gamma)
+    last_kept = (1 - gamma ** (steps - (n - 1))) / (1 - gamma)  # summed from state n-1 to the cut
+    assert true - last_kept <= 0.66 < gamma ** (h - 1) / (1 - gamma)  # h - 1 steps: not enough
+    assert 0 <= true - g <= 0.66  # the mean over the kept states is no further off
+    assert common.q_against_return([cut], actor, critic, 1.0, "cpu")[2] == 0
+    ended = dict(cut, terminated=True)
+    assert common.q_against_return([ended], actor, critic, 1.0, "cpu")[1:] == (
+        pytest.approx(np.mean(np.arange(steps, 0, -1))), steps)
 
 
 def test_evaluate_hands_back_each_episodes_states_and_rewards():

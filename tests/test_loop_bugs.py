@@ -182,3 +182,59 @@ def test_a2c_with_gae_targets_are_a_plus_v(monkeypatch, tmp_path):
         adv, _ = sums_by_hand(r, v, v_next, cfg.gamma, cfg.lam)
         np.testing.assert_allclose(data["adv"].numpy(), adv[keep], rtol=1e-4, atol=1e-5)
         np.testing.assert_allclose(data["ret"].numpy(), (adv + v)[keep], rtol=1e-4, atol=1e-5)
+
+
+def rows_of(minibatch, data):
+    """The row of `data` each row of `minibatch` is (matched by its obs, unique in CartPole)."""
+    where = {tuple(row): i for i, row in enumerate(data["obs"].tolist())}
+    assert len(where) == len(data["obs"])
+    return np.array([where[tuple(row)] for row in minibatch["obs"].tolist()])
+
+
+@pytest.mark.parametrize("script", [ppo, ppo_kl], ids=["ppo_cartpole", "ppo_kl_cartpole"])
+def test_ppo_loss_sees_each_epoch_partitioned_with_advantages_normalized_per_minibatch(
+        script, monkeypatch, tmp_path):
+    """What compute_loss_pi is fed: each epoch's minibatches hold every row of the batch once,
+    each row as the batch has it, and the advantages centred and scaled within the minibatch:
+    (A - mean) / (std + 1e-8), over that minibatch's rows."""
+    seen = []
+    real = script.compute_loss_pi
+    monkeypatch.setattr(script, "compute_loss_pi", lambda policy, mb, *rest: (
+        seen.append({k: x.detach().clone() for k, x in mb.items()}), real(policy, mb, *rest))[1])
+    cfg, _, calls = run(script, monkeypatch, tmp_path, "ppo_update")
+    per_update = cfg.update_epochs * cfg.num_minibatches
+    for _, data, _ in calls:
+        n = len(data["obs"])
+        minibatches = seen[:per_update]
+        del seen[:per_update]
+        while seen and len(seen[0]["obs"]) == n:  # the whole batch, after the update (stats)
+            seen.pop(0)
+        for epoch in range(cfg.update_epochs):
+            epoch_rows = []
+            for mb in minibatches[epoch * cfg.num_minibatches:(epoch + 1) * cfg.num_minibatches]:
+                rows = rows_of(mb, data)
+                epoch_rows += rows.tolist()
+                for key in ("act", "logp", "ret"):
+                    assert torch.equal(mb[key], data[key][rows]), key
+                raw = data["adv"][rows]
+                expected = (raw - raw.mean()) / (raw.std(unbiased=False) + 1e-8)
+                torch.testing.assert_close(mb["adv"], expected, rtol=1e-5, atol=1e-6)
+            assert sorted(epoch_rows) == list(range(n)), f"epoch {epoch} is no partition"
+    assert not seen
+
+
+def test_a2c_loss_sees_the_advantages_normalized_over_the_batch(monkeypatch, tmp_path):
+    """A2C's default (norm_adv): the loss gets (A - mean) / (std + 1e-8) of the n-step
+    advantages over the whole batch, and the targets unchanged."""
+    cfg, rollouts, calls = run(a2c, monkeypatch, tmp_path, "a2c_loss")
+    assert cfg.norm_adv
+    led_to = replay(rollouts, cfg.seed, 1 - cfg.gamma)
+    for r, keep, s_next, ((model,), data, _) in zip(rollouts, valid_rows(rollouts), led_to, calls):
+        with torch.no_grad():
+            v = model(r["obs"])[1].double().numpy()
+            v_next = model(torch.as_tensor(s_next))[1].double().numpy()
+        _, ret = sums_by_hand(r, v, v_next, cfg.gamma, lam=1.0)
+        adv = (ret - v)[keep]
+        np.testing.assert_allclose(data["ret"].numpy(), ret[keep], rtol=1e-4, atol=1e-5)
+        np.testing.assert_allclose(data["adv"].numpy(), (adv - adv.mean()) / (adv.std() + 1e-8),
+                                   rtol=1e-4, atol=1e-4)

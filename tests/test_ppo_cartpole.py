@@ -150,6 +150,25 @@ def test_learning_rate_anneals_linearly_to_zero(tmp_path):
     assert {float(r["lr"]) for r in rows} == {4e-3}
 
 
+def test_each_update_logs_clipfrac_and_the_zero_gradient_share_on_the_same_ratios(
+        monkeypatch, tmp_path):
+    """After each update: clipfrac_after and zero_grad_frac are counted on the very ratios
+    of the whole batch after the update, and the zero-gradient share is never above it."""
+    seen = []
+    real = ppo.common.ratio_stats
+    monkeypatch.setattr(ppo.common, "ratio_stats",
+                        lambda ratio, *a: (seen.append(ratio.clone()), real(ratio, *a))[1])
+    cfg = ppo.Config(total_timesteps=256 * 8, stop_when_solved=False, gifs=False, curves=False,
+                     eval_episodes=1, run_dir=str(tmp_path), print_every=10**6)
+    rows = list(csv.DictReader(open(ppo.train(cfg)["run_dir"] / "progress.csv")))
+    assert len(rows) == len(seen) == 8
+    for row, ratio in zip(rows, seen):
+        outside = ((ratio - 1).abs() > cfg.clip_coef).double().mean().item()
+        assert float(row["clipfrac_after"]) == pytest.approx(outside, abs=1e-6)
+        assert float(row["zero_grad_frac"]) <= float(row["clipfrac_after"])
+    assert list(rows[0])[-1] == "clipfrac_after"  # a new column goes at the end of the log
+
+
 def grads_of_the_first_step(update, params, *args):
     """The gradient the update's first optimizer step uses (the step itself moves nothing)."""
     opt, seen = torch.optim.SGD(params, lr=0.0), []

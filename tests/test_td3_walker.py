@@ -1,0 +1,106 @@
+"""TD3: each of its three fixes against a hand computation, the diff from DDPG kept small,
+exact resume after Ctrl-C, clear errors, and learning on a cheap task. (What the loop
+stores and what each update is fed: tests/test_replay_loops.py.)"""
+
+import difflib
+
+import numpy as np
+import pytest
+import torch
+
+import td3_walker as td3
+from conftest import ROOT, interrupt, run_script
+from test_ddpg_walker import PENDULUM, pendulum_flags
+
+
+@pytest.mark.quick
+def test_clipped_double_q_target_takes_the_smaller_estimate_by_hand():
+    """y = r + gamma * not_done * min(Q1', Q2'): 1 + 0.5 * 3 = 2.5 (Q2' the smaller), then
+    1 + 0.5 * 5 = 3.5 (Q1' the smaller), and no future after a termination: 1."""
+    y = td3.td_target(torch.tensor([1.0, 1.0, 1.0]), torch.tensor([1.0, 1.0, 0.0]),
+                      torch.tensor([5.0, 5.0, 5.0]), torch.tensor([3.0, 9.0, 9.0]), 0.5)
+    assert y.tolist() == [2.5, 3.5, 1.0]
+
+
+@pytest.mark.quick
+def test_target_action_noise_is_clipped_then_the_action_kept_in_its_box():
+    """With std 100 every noise draw is clipped: mu'(s') moves by exactly noise_clip times
+    the half-width (here 0.5 * 3 = 1.5), and the sum is clamped to [-3, 3]."""
+    cfg = td3.Config(env_id="InvertedPendulum-v5", hidden=8, target_noise=100.0, noise_clip=0.5)
+    low, high = np.array([-3.0, -3.0]), np.array([3.0, 3.0])
+    torch.manual_seed(0)  # an actor whose mu'(s') is well inside [-1.5, 1.5]
+    nets = td3.build(3, 2, low, high, cfg, "cpu")
+    seen = []
+
+    class Spy(torch.nn.Module):
+        def __init__(self, net):
+            super().__init__()
+            self.net = net
+
+        def forward(self, obs, action):
+            seen.append(action.clone())
+            return self.net(obs, action)
+
+    nets["critic_target"] = Spy(nets["critic_target"])
+    next_obs = torch.zeros(64, 3)
+    with torch.no_grad():
+        mu = nets["actor_target"](next_obs)
+    batch = (torch.zeros(64, 3), torch.zeros(64, 2), torch.ones(64), next_obs, torch.ones(64))
+    half = torch.tensor([3.0, 3.0])
+    td3.update_critics(nets, batch, half, -half, half, cfg)
+    assert mu.abs().max() < 1.5
+    assert torch.allclose((seen[0] - mu).abs(), torch.tensor(1.5))
+    mu_far = torch.full((64, 2), 2.5)  # near the bound: the smoothed action is clamped at 3
+    assert ((mu_far + 1.5).clamp(-3, 3) == 3).all()
+
+
+@pytest.mark.quick
+def test_the_diff_from_ddpg_is_the_three_fixes_and_little_else():
+    """`diff ddpg_walker.py td3_walker.py`: at most ~90 changed lines a side."""
+    ddpg_lines = (ROOT / "ddpg_walker.py").read_text().splitlines()
+    td3_lines = (ROOT / "td3_walker.py").read_text().splitlines()
+    diff = list(difflib.unified_diff(ddpg_lines, td3_lines, lineterm="", n=0))
+    removed = [d for d in diff if d.startswith("-") and not d.startswith("---")]
+    added = [d for d in diff if d.startswith("+") and not d.startswith("+++")]
+    assert len(removed) <= 90 and len(added) <= 90, (len(removed), len(added))
+    assert len(td3_lines) <= 400
+
+
+def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
+    """Ctrl-C mid-run writes a checkpoint; --resume ends exactly as the run that never
+    stopped: the same logs byte for byte, every network and optimizer bit for bit."""
+    unbroken = td3.train(td3.Config(**PENDULUM, run_dir=str(tmp_path / "unbroken")))["run_dir"]
+    code, out, err = interrupt("td3_walker.py", *pendulum_flags(), "--run-dir", tmp_path / "cut",
+                               after="step     1100")
+    assert code == 130, err
+    (run,) = (tmp_path / "cut").iterdir()
+    stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
+    assert 1100 <= stopped < 2400 and f"--resume {run}" in out
+    td3.train(td3.Config(resume=str(run)))
+    for name in ("evaluations.csv", "episodes.csv"):
+        assert (run / name).read_bytes() == (unbroken / name).read_bytes(), name
+    a, b = (torch.load(d / "checkpoint.pt", weights_only=True) for d in (unbroken, run))
+    nets = ("actor", "critic", "critic2", "actor_target", "critic_target", "critic2_target")
+    for key in nets:
+        assert all(torch.equal(b[key][k], v) for k, v in a[key].items()), key
+    for key in ("actor_opt", "critic_opt"):
+        for i, state in a[key]["state"].items():
+            assert all(torch.equal(b[key]["state"][i][k], v) for k, v in state.items()), key
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--policy-delay", "0"], "--policy-delay must be positive"),
+    (["--target-noise", "-1"], "--target-noise must be >= 0"),
+    (["--env-id", "CartPole-v1"], "is not a MuJoCo env"),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
+    p = run_script("td3_walker.py", *args, "--run-dir", tmp_path, timeout=120)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert not list(tmp_path.iterdir())
+
+
+def test_help_shows_the_three_fixes():
+    p = run_script("td3_walker.py", "--help", timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert all(flag in p.stdout for flag in ("--policy-delay", "--target-noise", "--noise-clip"))
