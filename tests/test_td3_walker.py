@@ -24,9 +24,9 @@ def test_clipped_double_q_target_takes_the_smaller_estimate_by_hand():
 
 @pytest.mark.quick
 def test_target_action_noise_is_clipped_then_the_action_kept_in_its_box():
-    """With std 100 every noise draw is clipped: mu'(s') moves by exactly noise_clip times
+    """With std 1e6 every noise draw is clipped: mu'(s') moves by exactly noise_clip times
     the half-width (here 0.5 * 3 = 1.5), and the sum is clamped to [-3, 3]."""
-    cfg = td3.Config(env_id="InvertedPendulum-v5", hidden=8, target_noise=100.0, noise_clip=0.5)
+    cfg = td3.Config(env_id="InvertedPendulum-v5", hidden=8, target_noise=1e6, noise_clip=0.5)
     low, high = np.array([-3.0, -3.0]), np.array([3.0, 3.0])
     torch.manual_seed(0)  # an actor whose mu'(s') is well inside [-1.5, 1.5]
     nets = td3.build(3, 2, low, high, cfg, "cpu")
