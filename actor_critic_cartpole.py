@@ -222,7 +222,8 @@ def train(cfg: Config):
     reward_scale = cfg.reward_scale if cfg.reward_scale is not None else default_scale
     # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
     run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(model=model), model, model,
-                       untrained, device, obs_dim=obs_dim, n_actions=n_actions)
+                       untrained, device, reward_scale=reward_scale, obs_dim=obs_dim,
+                       n_actions=n_actions)
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
@@ -276,7 +277,7 @@ def train(cfg: Config):
                 nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm)
             optimizer.step()
             plumbing.stop_if_diverged(global_step, stats, (model,), run.dir, next_obs)
-            run.log(stats, running_reward=running_reward)  # a progress.csv row, a line now and then
+            run.log(stats, visited=data["obs"], running_reward=running_reward)  # progress.csv
     envs.close()
     return run.finish()  # curve.png, the evaluation after training, the GIFs
 

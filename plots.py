@@ -250,18 +250,30 @@ def value_fit_panels(fig, grid, progress, kept):
 
 def map_panels(fig, cell, maps, title=""):
     """V(s) and pi(right|s) over pole angle and angular velocity, for each map in `maps`
-    ("untrained", "trained"), in the grid cell `cell`."""
-    panels = [(k, w) for k in ("value", "right") for w in ("untrained", "trained") if w in maps]
+    ("untrained", "trained"), in the grid cell `cell`; with maps["true"], the Monte-Carlo
+    V^pi(s) of the trained policy beside its V, on one colour scale, and with
+    maps["visited"], the states the policy visited marked on both."""
+    panels = [(k, w) for k in ("value", "right") for w in ("untrained", "trained", "true")
+              if w in maps and not (k == "right" and w == "true")]
     sub = cell.subgridspec(1, len(panels), wspace=0.5)
+    shared = [maps[w]["value"] for w in ("trained", "true") if w in maps]
+    vmin, vmax = min(m.min() for m in shared), max(m.max() for m in shared)
     for column, (key, when) in enumerate(panels):
         ax, m = fig.add_subplot(sub[0, column]), maps[when]
         extent = [m["angle"][0], m["angle"][-1], m["velocity"][0], m["velocity"][-1]]
+        scale = dict(vmin=0, vmax=1) if key == "right" else (
+            dict(vmin=vmin, vmax=vmax) if when in ("trained", "true") and "true" in maps else {})
         image = ax.imshow(m[key], origin="lower", aspect="auto", extent=extent,
-                          cmap="viridis" if key == "value" else "coolwarm",
-                          **({} if key == "value" else dict(vmin=0, vmax=1)))
+                          cmap="viridis" if key == "value" else "coolwarm", **scale)
         fig.colorbar(image, ax=ax, fraction=0.046)
         what = "V(s)" if key == "value" else "pi(right | s)"
-        ax.set_title(f"{title + ': ' if title else ''}{what}, {when}", fontsize=8)
+        name = "true V^pi(s), Monte-Carlo" if when == "true" else f"{what}, {when}"
+        ax.set_title(f"{title + ': ' if title else ''}{name}", fontsize=8)
+        visited = maps.get("visited")
+        if key == "value" and when in ("trained", "true") and visited is not None:
+            ax.plot(visited[:, 0], visited[:, 1], ",", color="white", alpha=0.5)
+            ax.set_xlim(extent[:2])
+            ax.set_ylim(extent[2:])
         ax.set_xlabel("pole angle (rad)", fontsize=7)
         ax.set_ylabel("angular velocity", fontsize=7)
 

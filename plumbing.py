@@ -501,6 +501,39 @@ def cartpole_maps(policy, value, device, n=41):
                 right=right.reshape(n, n).cpu().numpy())
 
 
+def cartpole_true_values(policy, device, gamma, reward_scale, seed, n=11, rollouts=10):
+    """The truth beside the learned V(s): V^pi(s), the expected discounted return of pi from
+    s, by Monte-Carlo. From each state of an n x n grid (the maps' pole angle and angular
+    velocity, the cart at rest in the middle), `rollouts` episodes with actions drawn from pi,
+    all at once in gymnasium's vectorized CartPole, without a time limit: each is followed
+    until it terminates or gamma^t < 0.001 (the rest is then under 0.1% of the largest
+    return). Rewards are scaled as the script scales them for learning. Returns
+    {"angle", "velocity", "value": (n, n)}."""
+    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
+
+    angle, velocity = np.linspace(-0.21, 0.21, n), np.linspace(-2.0, 2.0, n)
+    a, v = np.meshgrid(angle, velocity)  # rows: velocity, columns: angle
+    start = np.stack([np.zeros(a.size), np.zeros(a.size), a.ravel(), v.ravel()])  # (4, n*n)
+    envs = CartPoleVectorEnv(num_envs=n * n * rollouts, max_episode_steps=10**9)
+    envs.reset(seed=seed)
+    envs.state = np.repeat(start, rollouts, axis=1)  # each state `rollouts` times, in a row
+    rng, obs = np.random.default_rng(seed), envs.state.T.astype(np.float32)
+    alive, total, discount = np.ones(envs.num_envs, dtype=bool), np.zeros(envs.num_envs), 1.0
+    while alive.any() and discount >= 1e-3:
+        with torch.no_grad():
+            out = policy(torch.as_tensor(obs, device=device))
+        logits = out[0] if isinstance(out, tuple) else out
+        probs = torch.softmax(logits.double(), -1).cpu().numpy()
+        action = (rng.random((len(probs), 1)) > probs.cumsum(1)).sum(1)  # a ~ pi(.|s)
+        obs, reward, terminated, _, _ = envs.step(np.minimum(action, probs.shape[1] - 1))
+        total += alive * discount * reward_scale * reward  # the step that ends still counts
+        alive &= ~terminated
+        discount *= gamma
+    envs.close()
+    return dict(angle=angle, velocity=velocity,
+                value=total.reshape(n * n, rollouts).mean(1).reshape(n, n))
+
+
 # How the progress line shows each logged number, in this order (the ones a script logs).
 SHOWN = {"running_reward": "6.1f", "loss_pi": "+.3f", "loss_v": ".2e", "approx_kl": ".4f",
          "kl": ".4f", "beta": ".3g", "entropy": ".3f", "clipfrac": ".3f"}
@@ -515,12 +548,14 @@ class Run:
     V)) is mapped in inside.png; `untrained` is drawn in before.gif."""
 
     def __init__(self, script, cfg, threshold, optimizer, nets, policy, value, untrained, device,
-                 **info):
+                 reward_scale=1.0, **info):
         self.script, self.cfg, self.threshold, self.optimizer = script, cfg, threshold, optimizer
         self.nets, self.policy, self.untrained, self.device = nets, policy, untrained, device
         self.value = value  # for the maps in inside.png; untrained, before any update:
         self.untrained_value = untrained if value is policy else copy.deepcopy(value)
         self.kept = []  # (env step, {name: array}) of each update, for inside.png
+        self.visited = []  # the obs of the last few updates' batches: the maps' marks
+        self.reward_scale = reward_scale  # as the script scales rewards: V's scale
         self.info = info  # what --eval needs to rebuild the networks, e.g. obs_dim
         self.start_time = time.time()
         self.dir = make_run_dir(cfg.run_dir, script, cfg.env_id, cfg.seed)
@@ -568,12 +603,15 @@ class Run:
         self.stopped = True
         return True
 
-    def log(self, stats, **columns):
+    def log(self, stats, visited=None, **columns):
         """After an update: its progress.csv row (the step, episodes, mean of the last 20
         returns, `columns`, the learning rate, then the numbers of `stats`; its arrays, such as
         the batch's ratios, are kept for inside.png), and every print_every updates (and after
-        the first) a progress line."""
+        the first) a progress line. `visited`: the batch's observations; the last 10 batches'
+        are marked on inside.png's maps, as the states the policy really visits."""
         self.updates += 1
+        if visited is not None:
+            self.visited = [*self.visited[-9:], visited.detach().cpu().numpy()]
         arrays = {k: v.detach().cpu().numpy() for k, v in stats.items() if torch.is_tensor(v)}
         stats = {k: v for k, v in stats.items() if k not in arrays}  # numbers: to progress.csv
         self.kept.append((self.global_step, arrays))
@@ -623,10 +661,17 @@ class Run:
             maps = {when: cartpole_maps(policy, value, self.device) for when, policy, value in (
                 ("untrained", self.untrained, self.untrained_value),
                 ("trained", self.policy, self.value))}
+            true = cartpole_true_values(self.policy, self.device, self.cfg.gamma,
+                                        self.reward_scale, self.cfg.eval_seed)
+            visited = (np.concatenate(self.visited)[:, 2:4] if self.visited
+                       else np.zeros((0, 2)))  # (pole angle, angular velocity) of each obs
+            maps.update(true=true, visited=visited)
             with written_whole(self.dir / "maps.npz") as tmp, open(tmp, "wb") as f:
-                np.savez(f, **{f"{when}_{key}": m[key] for when, m in maps.items()
+                np.savez(f, **{f"{when}_{key}": maps[when][key] for when in ("untrained", "trained")
                                for key in ("value", "right")},
-                         angle=maps["trained"]["angle"], velocity=maps["trained"]["velocity"])
+                         angle=maps["trained"]["angle"], velocity=maps["trained"]["velocity"],
+                         true_value=true["value"], true_angle=true["angle"],
+                         true_velocity=true["velocity"], visited=visited)
         return aside(plots.draw_inside, self.dir, self.script, asdict(self.cfg), self.kept, maps)
 
     def finish(self):

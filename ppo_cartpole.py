@@ -266,7 +266,8 @@ def train(cfg: Config):
     num_updates = cfg.total_timesteps // (T * N)
     # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
     run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(policy=policy, value=value_net),
-                       policy, value_net, untrained, device, obs_dim=obs_dim, n_actions=n_actions)
+                       policy, value_net, untrained, device, reward_scale=cfg.reward_scale,
+                       obs_dim=obs_dim, n_actions=n_actions)
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
@@ -328,7 +329,7 @@ def train(cfg: Config):
                 ret=returns).items()}
             stats = ppo_update(policy, value_net, optimizer, data, cfg)
             plumbing.stop_if_diverged(global_step, stats, (policy, value_net), run.dir, next_obs)
-            run.log(stats)  # a progress.csv row; a progress line every print_every updates
+            run.log(stats, visited=data["obs"])  # a progress.csv row; a line now and then
     envs.close()
     return run.finish()  # curve.png, the evaluation after training, the GIFs
 

@@ -6,6 +6,7 @@ import sys
 import imageio.v3 as iio
 import numpy as np
 import pytest
+import torch
 
 import ppo_cartpole as ppo
 from conftest import ROOT, run_script
@@ -154,3 +155,61 @@ def test_maps_of_several_runs_side_by_side(tmp_path):
     assert_curve_drawn(out)
     bad = run_script("plots.py", "--maps", tmp_path)
     assert bad.returncode == 2 and "has no maps.npz" in bad.stderr
+
+
+class Lean(torch.nn.Module):
+    """A deterministic policy: push toward the side the pole falls to (angle + velocity / 4),
+    so that a Monte-Carlo value equals one brute-force rollout exactly."""
+
+    def forward(self, obs):
+        lean = obs[..., 2] + obs[..., 3] / 4
+        return torch.stack([-1e4 * lean, 1e4 * lean], -1)  # logits: pi is 0 or 1
+
+
+def brute_force_value(angle, velocity, gamma, scale):
+    """One rollout of Lean from (0, 0, angle, velocity) in gymnasium's own CartPole, the
+    discounted scaled rewards summed until it terminates or gamma^t < 0.001."""
+    import gymnasium as gym
+
+    env = gym.make("CartPole-v1").unwrapped
+    env.reset(seed=0)
+    env.state = np.array([0.0, 0.0, angle, velocity])
+    total, discount, obs = 0.0, 1.0, env.state.astype(np.float32)
+    while discount >= 1e-3:
+        with torch.no_grad():
+            action = int(Lean()(torch.as_tensor(obs)).argmax())
+        obs, reward, terminated, _, _ = env.step(action)
+        total += discount * scale * reward
+        discount *= gamma
+        if terminated:
+            break
+    return total
+
+
+def test_true_value_map_is_the_brute_force_rollout_at_each_state():
+    """plumbing.cartpole_true_values against a hand-written rollout in the single env, at
+    the grid's corners (one step from failure) and its centre (balanced to the horizon)."""
+    import plumbing
+
+    true = plumbing.cartpole_true_values(Lean(), "cpu", 0.99, 0.05, seed=0, n=3, rollouts=2)
+    assert true["angle"].tolist() == [-0.21, 0.0, 0.21]
+    for i, velocity in enumerate(true["velocity"]):
+        for j, angle in enumerate(true["angle"]):
+            expected = brute_force_value(angle, velocity, 0.99, 0.05)
+            assert true["value"][i, j] == pytest.approx(expected, rel=1e-9), (angle, velocity)
+    assert true["value"][1, 1] > 4.9 and true["value"][0, 0] < 0.2  # balanced; falling
+
+
+def test_the_maps_mark_the_states_of_the_runs_last_batches(tmp_path, monkeypatch):
+    """maps.npz's visited states are (pole angle, angular velocity) of the observations in
+    the last 10 batches the run trained on, and its true V map has the trained V's range."""
+    batches = []
+    real = ppo.ppo_update
+    monkeypatch.setattr(ppo, "ppo_update", lambda policy, value, opt, data, cfg: (
+        batches.append(data["obs"].clone()), real(policy, value, opt, data, cfg))[1])
+    run = quick_run(tmp_path, 0, total_timesteps=256 * 12)["run_dir"]
+    maps = np.load(run / "maps.npz")
+    expected = torch.cat(batches[-10:])[:, 2:4].numpy()
+    np.testing.assert_array_equal(maps["visited"], expected)
+    assert maps["true_value"].shape == (11, 11) and np.isfinite(maps["true_value"]).all()
+    assert 0 < maps["true_value"].max() <= 1 / (1 - 0.99) * 0.05 + 1e-9  # scaled rewards
