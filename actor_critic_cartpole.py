@@ -183,7 +183,9 @@ def a2c_loss(model, data, cfg):
     logits, values = model(obs)
     dist = Categorical(logits=logits)  # pi(.|s)
     # Policy gradient: grad log pi(a_t|s_t) * A_t, ascended (Mnih et al. 2016, Algorithm S3);
-    # we minimize its negative. A_t is a constant here: no gradient flows into it.
+    # we minimize its negative. A_t is a constant here: no gradient flows into it. Any V(s)
+    # as the baseline leaves the expected gradient as it is: a weak critic makes it noisier,
+    # not wrong (docs/why.md).
     loss_pi = -(dist.log_prob(act) * adv).mean()
     # Critic: (R_t - V(s_t))^2 (Algorithm S3), halved as is usual: plain MSE.
     loss_v = 0.5 * ((values - ret) ** 2).mean()

@@ -192,7 +192,10 @@ def td_target(reward, not_done, next_q, gamma):
 
 def compute_loss_actor(actor, critic, obs):
     """Deterministic policy gradient: grad J = mean grad_a Q(s, a)|a=mu(s) * grad mu(s)
-    (Lillicrap et al. 2016, Algorithm 1). The actor ascends Q, so its loss is -Q."""
+    (Silver et al. 2014, Theorem 1; Lillicrap et al. 2016, Algorithm 1). The actor ascends Q,
+    so its loss is -Q: autograd through Q's action input gives the product. The states come
+    from the buffer (off-policy DPG), the action is mu(s): where the critic may never have
+    been trained, and may overestimate (docs/why.md)."""
     return -critic(obs, actor(obs)).mean()
 
 

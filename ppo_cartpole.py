@@ -171,7 +171,11 @@ class RolloutBuffer:
 
 
 def compute_loss_pi(policy, data, clip_coef):
-    """Clipped surrogate loss on a batch `data`: (loss_pi, entropy, info: approx_kl, clipfrac)."""
+    """Clipped surrogate loss on a batch `data`: (loss_pi, entropy, info: approx_kl, clipfrac).
+    Why: the ratio reweights pi_old's samples so that several epochs can reuse them (L_CPI,
+    eq. 6, whose gradient at pi_old is the policy gradient); the min() with the clipped term
+    is a pessimistic bound that stops rewarding a sample once its ratio is past the band on
+    its advantage's side (docs/why.md)."""
     obs, act, adv, logp_old = data["obs"], data["act"], data["adv"], data["logp"]
     dist = Categorical(logits=policy(obs))  # pi(.|s)
     logp = dist.log_prob(act)  # log pi(a|s) of the taken actions, (B,)

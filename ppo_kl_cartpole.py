@@ -171,7 +171,10 @@ class RolloutBuffer:
 
 
 def compute_loss_pi(policy, data, beta):
-    """KL-penalized surrogate loss on a batch `data`: (loss_pi, entropy of pi, info with kl)."""
+    """KL-penalized surrogate loss on a batch `data`: (loss_pi, entropy of pi, info with kl).
+    Why: the ratio reweights pi_old's samples so that several epochs can reuse them (L_CPI,
+    eq. 6); the penalty is the penalized form of TRPO's lower bound on the true improvement,
+    with beta adapted in place of its unknown constant (docs/why.md)."""
     obs, act, adv, logp_old = data["obs"], data["act"], data["adv"], data["logp"]
     dist = Categorical(logits=policy(obs))  # pi(.|s)
     logp = dist.log_prob(act)  # log pi(a|s) of the taken actions, (B,)

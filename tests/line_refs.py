@@ -23,6 +23,21 @@ def name_after(line, ref):
     return name.group(1) if name and ":" not in name.group(1) else None
 
 
+def prose_lines(path):
+    """The line numbers of a Python file's docstrings and comment-only lines: a name is looked
+    for in the code first (the word `ratio` in a docstring is not the line that computes it)."""
+    import ast
+
+    source = path.read_text(encoding="utf-8")
+    lines = {i + 1 for i, s in enumerate(source.splitlines()) if s.lstrip().startswith("#")}
+    for node in ast.walk(ast.parse(source)):
+        body = getattr(node, "body", None)
+        if (isinstance(body, list) and body and isinstance(body[0], ast.Expr)
+                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str)):
+            lines |= set(range(body[0].lineno, body[0].end_lineno + 1))
+    return lines
+
+
 def refreshed(text):
     """(the guide with each LINE moved to its name's nearest line, [(old ref, new ref) moved],
     [problems: a reference without a name, or a name the file does not hold])."""
@@ -34,7 +49,11 @@ def refreshed(text):
                 problems.append(f"no name after {ref.group(0)}")
                 return ref.group(0)
             source = (ROOT / file).read_text(encoding="utf-8").splitlines()
-            hits = [i + 1 for i, s in enumerate(source) if name in s]
+            prose = prose_lines(ROOT / file)
+            word = re.compile((r"(?<!\w)" if name[0].isalnum() or name[0] == "_" else "")
+                              + re.escape(name) + (r"(?!\w)" if name[-1].isalnum() else ""))
+            hits = [i + 1 for i, s in enumerate(source) if word.search(s) and i + 1 not in prose]
+            hits = hits or [i + 1 for i, s in enumerate(source) if word.search(s)]  # a comment
             if not hits:
                 problems.append(f"{file} holds no {name!r} ({ref.group(0)})")
                 return ref.group(0)
@@ -53,10 +72,10 @@ def main(argv):
         print(f"{old} -> {now}")
     for problem in problems:
         print(f"error: {problem}", file=sys.stderr)
-    if "--check" in argv:
+    if "--check" in argv or problems:  # a problem: nothing is rewritten
         return 1 if moved or problems else 0
     GUIDE.write_text(new, encoding="utf-8")
-    return 1 if problems else 0
+    return 0
 
 
 if __name__ == "__main__":

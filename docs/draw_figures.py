@@ -1,0 +1,48 @@
+"""The docs' pictures that no training run draws: PPO's clipped objective against the ratio
+(the PPO paper's Figure 1, drawn here from the formula), for docs/why.md.
+
+    python docs/draw_figures.py     # writes docs/ppo_clip_objective.png
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import plots  # noqa: E402
+
+
+def clip_term(r, adv, eps):
+    """One sample's term of L_CLIP: min(r A, clip(r, 1 - eps, 1 + eps) A)  (Schulman et al.
+    2017, eq. 7), for ratios r (an array)."""
+    return np.minimum(r * adv, np.clip(r, 1 - eps, 1 + eps) * adv)
+
+
+def draw_clip_objective(path, eps=0.2):
+    """L_CLIP's term against r for A = +1 and A = -1, beside L_CPI's r A (dashed)."""
+    plt = plots.pyplot()
+    r = np.linspace(0.0, 2.0, 401)
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
+    for ax, adv in zip(axes, (1.0, -1.0)):
+        ax.plot(r, r * adv, color="gray", ls="--", lw=1, label="L_CPI: r A")
+        ax.plot(r, clip_term(r, adv, eps), color="C0", lw=2,
+                label="L_CLIP: min(r A, clip(r, 1-eps, 1+eps) A)")
+        flat = r > 1 + eps if adv > 0 else r < 1 - eps
+        ax.fill_between(r, -2.2, 2.2, where=flat, color="C0", alpha=0.1,
+                        label="flat: no gradient")
+        ax.axvline(1, color="k", lw=0.6)
+        ax.plot([1], [adv], "o", color="C3", ms=5, label="r = 1: where each update starts")
+        ax.set_ylim(-2.2, 2.2)
+        ax.set_xlabel("r = pi(a|s) / pi_old(a|s)")
+        ax.set_title(f"A {'> 0' if adv > 0 else '< 0'} (eps = {eps:g})", fontsize=10)
+        ax.legend(fontsize=7, loc="upper left" if adv > 0 else "upper right")
+    axes[0].set_ylabel("the sample's term of the objective")
+    fig.tight_layout()
+    return plots.save_whole(plt, fig, path, dpi=90)
+
+
+if __name__ == "__main__":
+    print(draw_clip_objective(ROOT / "docs" / "ppo_clip_objective.png"))
