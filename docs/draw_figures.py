@@ -1,7 +1,9 @@
-"""The docs' pictures that no training run draws: PPO's clipped objective against the ratio
-(the PPO paper's Figure 1, drawn here from the formula), for docs/why.md.
+"""The docs' pictures that no single training run draws: PPO's clipped objective against the
+ratio (the PPO paper's Figure 1, drawn here from the formula), for docs/why.md; and DDPG's
+and TD3's Q against the discounted return side by side, from the committed evaluations of
+two runs (seed 0, the defaults, the same first 200,000 steps), for docs/inside.md.
 
-    python docs/draw_figures.py     # writes docs/ppo_clip_objective.png
+    python docs/draw_figures.py     # writes docs/ppo_clip_objective.png, docs/inside_td3_ddpg.png
 """
 
 import sys
@@ -37,12 +39,29 @@ def draw_clip_objective(path, eps=0.2):
         ax.plot([1], [adv], "o", color="C3", ms=5, label="r = 1: where each update starts")
         ax.set_ylim(-2.2, 2.2)
         ax.set_xlabel("r = pi(a|s) / pi_old(a|s)")
-        ax.set_title(f"A {'> 0' if adv > 0 else '< 0'} (eps = {eps:g})", fontsize=10)
-        ax.legend(fontsize=7, loc="upper left" if adv > 0 else "upper right")
+        ax.set_title(f"A = {adv:+g} (eps = {eps:g})", fontsize=10)
+        ax.legend(fontsize=7, loc="lower right" if adv > 0 else "upper right")
     axes[0].set_ylabel("the sample's term of the objective")
     fig.tight_layout()
     return plots.save_whole(plt, fig, path, dpi=90)
 
 
+def draw_q_against_return(path, upto=200_000):
+    """Q(s, mu(s)) against the discounted return, DDPG beside TD3, seed 0, up to `upto`."""
+    results = ROOT / "benchmarks" / "results"
+    runs = {"DDPG (ddpg_walker.py)": results / "ddpg_walker_200k_inside" / "evaluations.csv",
+            "TD3 (td3_walker.py)": results / "td3_walker_1m" / "seed0" / "evaluations.csv"}
+    plt = plots.pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6), sharey=True)
+    for ax, (name, csv_path) in zip(axes, runs.items()):
+        table = plots.read_csv(csv_path)
+        keep = table["global_step"] <= upto
+        plots.overestimation(ax, {k: v[keep] for k, v in table.items()})
+        ax.set_title(f"{name}, Walker2d-v5, seed 0", fontsize=9)
+    fig.tight_layout()
+    return plots.save_whole(plt, fig, path, dpi=80)
+
+
 if __name__ == "__main__":
     print(draw_clip_objective(ROOT / "docs" / "ppo_clip_objective.png"))
+    print(draw_q_against_return(ROOT / "docs" / "inside_td3_ddpg.png"))
