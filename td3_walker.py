@@ -21,7 +21,7 @@ The run folder keeps evaluations.csv, episodes.csv, model.pt, best.pt and best.g
 best evaluation so far) and curve.png, and every checkpoint_every steps a checkpoint.pt
 from which --resume continues the very same run (plumbing.py writes them all).
 
-    python td3_walker.py                          # 1M steps: a few hours on a CPU
+    python td3_walker.py                          # 1M steps: several hours on a CPU
     python td3_walker.py --resume runs/<run>      # continue a stopped or killed run exactly
     python td3_walker.py --eval runs/<run>/best.pt --watch    # replay a saved actor
 
@@ -103,7 +103,7 @@ class Config(plumbing.CheckpointFlags):
     start_steps: int = 25_000
     """uniformly random actions for this many steps before the actor acts and learning
     starts (the TD3 authors' code: 25k; their paper: 1k on Walker2d; at least batch_size)"""
-    # --- DDPG's settings ---
+    # --- DDPG ---
     expl_noise: float = 0.1
     """std of the Gaussian exploration noise, as a fraction of the action range's half-width
     (0.1 .. 0.3)"""
@@ -201,8 +201,9 @@ def soft_update(target, source, tau):
 
 def td_target(reward, not_done, next_q1, next_q2, gamma):
     """Fix 1, clipped double Q: y = r + gamma * min(Q1'(s', a~), Q2'(s', a~)), with no future
-    after a termination (not_done = 0)  (Fujimoto et al. 2018, eq. 10 and Algorithm 1). Each
-    critic's error pushes one way or the other; the smaller of the two pushes less upward."""
+    after a termination (not_done = 0)  (Fujimoto et al. 2018, eq. 10 and Algorithm 1). If one
+    critic overestimates at (s', a~), the min takes the other: the target is high only where
+    both are."""
     return reward + gamma * not_done * torch.min(next_q1, next_q2)
 
 
@@ -215,14 +216,14 @@ def compute_loss_actor(actor, critic, obs):
     return -critic(obs, actor(obs)).mean()
 
 
-def update_critics(nets, batch, noise_scale, low, high, cfg):
+def update_critics(nets, batch, half_width, low, high, cfg):
     """One step of both critics on a minibatch toward the clipped double-Q target."""
     obs, action, reward, next_obs, not_done = batch
     with torch.no_grad():  # targets are constants: no gradient flows into them
         # Fix 3, target policy smoothing: a~ = clip(mu'(s') + clip(eps, -c, c), low, high),
         # eps ~ N(0, sigma)  (Fujimoto et al. 2018, section 5.3 and Algorithm 1)
         eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
-        next_action = (nets["actor_target"](next_obs) + noise_scale * eps).clamp(low, high)
+        next_action = (nets["actor_target"](next_obs) + half_width * eps).clamp(low, high)
         y = td_target(reward, not_done, nets["critic_target"](next_obs, next_action),
                       nets["critic2_target"](next_obs, next_action), cfg.gamma)
     # L = mean (y - Q1(s, a))^2 + mean (y - Q2(s, a))^2: both critics learn the same target
@@ -235,7 +236,8 @@ def update_critics(nets, batch, noise_scale, low, high, cfg):
 
 
 def update_actor_and_targets(nets, obs, cfg):
-    """One actor step, then every target moves a fraction tau toward its network."""
+    """One actor step on Q1, then every target moves a fraction tau toward its network: fix 2
+    delays the targets with the actor."""
     actor_loss = compute_loss_actor(nets["actor"], nets["critic"], obs)
     nets["actor_opt"].zero_grad()
     # inputs=: gradients for the actor only; the critic's would be thrown away.
@@ -299,7 +301,7 @@ def train(cfg: Config):
                                    act_dim=act_dim, low=low.tolist(), high=high.tolist())
     global_step, obs = run.start(obs)
     first_step, losses = global_step, None
-    actor_loss = torch.tensor(0.0)  # shown in the progress line until the first actor step
+    actor_loss = torch.tensor(0.0)  # the progress line shows the last actor step's loss
 
     with run.until_interrupted():  # Ctrl-C: the loop stops after its step, with a checkpoint
         for global_step in range(first_step + 1, cfg.total_timesteps + 1):
@@ -326,8 +328,8 @@ def train(cfg: Config):
             if learning:
                 batch = buffer.sample(cfg.batch_size)
                 critic_loss = update_critics(nets, batch, half_width, low_t, high_t, cfg)
-                if global_step % cfg.policy_delay == 0:
-                    actor_loss = update_actor_and_targets(nets, batch[0], cfg)
+                if global_step % cfg.policy_delay == 0:  # (one critic update per env step)
+                    actor_loss = update_actor_and_targets(nets, batch[0], cfg)  # [0]: states
                 losses = (critic_loss, actor_loss)
             run.print_progress(global_step, losses)  # every print_every steps; nan/inf: stop
 

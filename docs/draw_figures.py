@@ -57,7 +57,11 @@ def draw_q_against_return(path, upto=200_000):
         table = plots.read_csv(csv_path)
         keep = table["global_step"] <= upto
         plots.overestimation(ax, {k: v[keep] for k, v in table.items()})
-        ax.set_title(f"{name}, Walker2d-v5, seed 0", fontsize=9)
+        for line in ax.get_lines():
+            line.set_marker(".")  # one point per evaluation; none during the warm-up
+        ax.axvspan(0, 25_000, color="gray", alpha=0.12, label="random warm-up")
+        ax.legend(fontsize=7, loc="upper left")
+        ax.set_title(f"{name}, Walker2d-v5, seed 0, the first {upto:,} steps", fontsize=9)
     fig.tight_layout()
     return plots.save_whole(plt, fig, path, dpi=80)
 

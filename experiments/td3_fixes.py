@@ -6,7 +6,8 @@ time, then all three. td3_walker.py is DDPG plus the fixes, and each fix can be 
     (td_target_of_q1_alone below, swapped in; the second critic is still trained, unused);
   - delayed policy updates off: --policy-delay 1 (the actor and the targets every step);
   - target policy smoothing off: --target-noise 0.
-With all three off, the loop is DDPG's. What to look for: the critic's estimate Q(s, mu(s))
+With all three off, the update is DDPG's (not bit for bit: the unused second critic is still
+trained, and its initial weights shift the random streams). What to look for: the critic's estimate Q(s, mu(s))
 on the evaluation states beside the discounted return mu really obtained from them (logged
 in evaluations.csv as q_estimate and discounted_return; common.q_against_return), and their
 gap, Q minus the return: DDPG's runs far above the return (docs/inside.md); which fix brings
