@@ -6,7 +6,9 @@ also name another script (`script`), to set two algorithms side by side.
 
 Each (variant, seed) run is independent: with --workers N (default: one per core) N of them
 run at once, each in its own process with one torch thread, and give the very numbers that
-one after another in this process gives (every run seeds all it draws from).
+one after another in this process gives (every run seeds all it draws from). Past one
+machine, --cluster FOLDER hands each run to submitit (pip install submitit): a Slurm job
+where Slurm is (--partition NAME), a local process otherwise; the same numbers again.
 """
 
 import contextlib
@@ -48,17 +50,21 @@ def swapped(swaps):
             setattr(owner, name, old)
 
 
-def run(script, variants, seeds, budget, columns=(), workers=1, **settings):
+def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, **settings):
     """{variant: [(steps, values, kept), one per seed]}: the train() of `script` (or of the
     variant's own "script") for each variant and seed, `budget` env steps, no solved stop, no
     GIFs. The values: the CartPole scripts' mean return of the last 20 episodes after each
     update; DDPG's evaluation returns. kept: {column: (steps, values)} for each of `columns`
     in the run's log (progress.csv, or DDPG's evaluations.csv). workers > 1: that many runs at
-    once, each in a process of its own (forked, so a swap made here is there too)."""
+    once, each in a process of its own (forked, so a swap made here is there too). cluster:
+    {"folder": ..., "partition": ...} for submitit, one job per run (see on_cluster)."""
     jobs = [(name, seed) for name in variants for seed in seeds]
     with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
         task = (script, variants, budget, columns, settings, tmp)
-        if workers == 1 or len(jobs) == 1:
+        if cluster is not None:
+            done = on_cluster(task, jobs, **cluster)
+            workers = 1  # no pool to close
+        elif workers == 1 or len(jobs) == 1:
             done = (one_run(task, job) for job in jobs)
         else:  # a fresh process per run (maxtasksperchild=1): nothing carries from one to the next
             global _TASK
@@ -96,6 +102,29 @@ def one_run(task, job):
 
 
 _TASK = None  # run()'s task, for the forked workers
+
+
+def on_cluster(task, jobs, folder, partition=None):
+    """Each (variant, seed) run as a submitit job: on Slurm where `srun` is found (a job array,
+    `partition` if given), else a local process. submitit pickles `one_run` with the task
+    (the swapped functions by value, the scripts by name), so the jobs import the scripts:
+    their folders go on PYTHONPATH, and on Slurm `folder` must be on a filesystem the nodes
+    share. Yields what one_run returns, as the jobs finish."""
+    try:
+        import submitit
+    except ImportError:
+        sys.exit("error: --cluster needs submitit: pip install submitit")
+    paths = [str(ROOT), str(ROOT / "experiments"), os.environ.get("PYTHONPATH", "")]
+    os.environ["PYTHONPATH"] = os.pathsep.join(p for p in paths if p)
+    run_dir = Path(folder) / "runs"  # the runs' own folders: where the jobs can write
+    task = (*task[:-1], str(run_dir))
+    executor = submitit.AutoExecutor(folder=Path(folder) / "%j")
+    executor.update_parameters(timeout_min=24 * 60, cpus_per_task=1, name="experiment",
+                               **({"slurm_partition": partition} if partition else {}))
+    submitted = executor.map_array(one_run, [task] * len(jobs), jobs)
+    print(f"{len(submitted)} jobs on {executor.cluster} (logs: {folder})", flush=True)
+    for job in submitit.helpers.as_completed(submitted):
+        yield job.result()
 
 
 def _one_run_of_task(job):
@@ -203,7 +232,8 @@ def band(ax, runs, color, label=None):
 def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=475.0,
          what="mean return of the last 20 episodes", quick_budget=2048, panels=(),
          quick_settings=None, **settings):
-    """python experiments/<name>.py [--quick] [--docs] [--workers N]: every variant over
+    """python experiments/<name>.py [--quick] [--docs] [--workers N] [--cluster FOLDER
+    [--partition NAME]]: every variant over
     `seeds` at `budget` steps, then the table and the figure in runs/experiments/ (--docs:
     docs/experiments/, the committed ones). --quick: one seed, `quick_budget` steps (2048 for
     CartPole, 2500 for DDPG), the figure in a temporary folder (the tests run it)."""
@@ -215,14 +245,27 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
               f"docs/experiments/{name}.png and .csv instead (the committed ones: the same "
               "numbers on the same machine); --quick writes to a temporary folder. --workers N: "
               f"N runs at once, one process and one torch thread each (default: one per core, "
-              f"here {workers}); the numbers do not depend on it.")
+              f"here {workers}); the numbers do not depend on it. --cluster FOLDER: each run a "
+              "submitit job instead (Slurm where there is one, --partition NAME; else a local "
+              "process), its logs in FOLDER (pip install submitit).")
         raise SystemExit(0)
-    if "--workers" in args[:-1] and args[args.index("--workers") + 1].isdigit():
-        at = args.index("--workers")
-        workers, args = int(args[at + 1]), args[:at] + args[at + 2:]
-    if workers < 1 or not set(args) <= {"--quick", "--docs"} or len(set(args)) < len(args):
+    cluster = None
+    for flag in ("--workers", "--cluster", "--partition"):
+        if flag in args[:-1] and not args[args.index(flag) + 1].startswith("--"):
+            at = args.index(flag)
+            value, args = args[at + 1], args[:at] + args[at + 2:]
+            if flag == "--workers":
+                workers = int(value) if value.isdigit() else 0
+            elif flag == "--cluster":
+                cluster = {**(cluster or {}), "folder": value}
+            else:
+                cluster = {**(cluster or {}), "partition": value}
+    bad_cluster = cluster is not None and "folder" not in cluster  # --partition alone
+    if (workers < 1 or not set(args) <= {"--quick", "--docs"} or len(set(args)) < len(args)
+            or bad_cluster):
         print(f"error: unknown argument(s) {' '.join(sys.argv[1:])}; the options are --quick, "
-              "--docs and --workers N (N >= 1; see --help)", file=sys.stderr)
+              "--docs, --workers N (N >= 1) and --cluster FOLDER [--partition NAME] (see "
+              "--help)", file=sys.stderr)
         raise SystemExit(2)
     quick = "--quick" in args
     started = time.time()
@@ -230,7 +273,7 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     if quick:  # quick_settings: overrides of `settings` that a quick budget needs
         seeds, budget, settings = seeds[:1], quick_budget, {**settings, **(quick_settings or {})}
         OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
-    curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers,
+    curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers, cluster,
                  **settings)
     path = report(name, curves, solved, what, panels)
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "

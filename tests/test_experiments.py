@@ -239,8 +239,8 @@ def test_help_prints_the_question_and_a_bad_argument_is_one_line():
     p = run_script("experiments/clip_or_penalty.py", "--qick", timeout=60)
     assert p.returncode == 2 and p.stdout == ""
     assert p.stderr.strip().splitlines() == [
-        "error: unknown argument(s) --qick; the options are --quick, --docs and --workers N "
-        "(N >= 1; see --help)"]
+        "error: unknown argument(s) --qick; the options are --quick, --docs, --workers N "
+        "(N >= 1) and --cluster FOLDER [--partition NAME] (see --help)"]
 
 
 def test_two_workers_give_the_same_csvs_byte_for_byte_as_one(tmp_path):
@@ -255,6 +255,20 @@ def test_two_workers_give_the_same_csvs_byte_for_byte_as_one(tmp_path):
         assert f"with {workers} worker(s)" in p.stdout
         written[workers] = (folder / "advantage_normalization.csv").read_bytes()
     assert written[1] == written[2]
+
+
+def test_the_cluster_path_gives_the_same_csvs_through_submitits_local_executor(tmp_path):
+    """--cluster hands each run to submitit (Slurm where there is one; here its local
+    executor, a process per job): the same numbers as the runs in this process."""
+    pytest.importorskip("submitit", reason="the cluster path needs submitit (optional)")
+    written = {}
+    for how in (["--workers", "1"], ["--cluster", tmp_path / "jobs"]):
+        p = run_script("experiments/advantage_normalization.py", "--quick", *how, timeout=300)
+        assert p.returncode == 0, p.stderr
+        folder = Path(p.stdout.rstrip().split("figure: ")[-1]).parent
+        written[how[0]] = (folder / "advantage_normalization.csv").read_bytes()
+    assert "2 jobs on local" in p.stdout
+    assert written["--workers"] == written["--cluster"]
 
 
 def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
