@@ -255,7 +255,7 @@ def map_panels(fig, cell, maps, title=""):
     maps["visited"], the states the policy visited marked on both."""
     panels = [(k, w) for k in ("value", "right") for w in ("untrained", "trained", "true")
               if w in maps and not (k == "right" and w == "true")]
-    sub = cell.subgridspec(1, len(panels), wspace=0.5)
+    sub = cell.subgridspec(1, len(panels), wspace=0.75)
     shared = [maps[w]["value"] for w in ("trained", "true") if w in maps]
     vmin, vmax = min(m.min() for m in shared), max(m.max() for m in shared)
     for column, (key, when) in enumerate(panels):

@@ -867,8 +867,10 @@ class CheckpointedRun:
             print(f"run folder: {self.dir}  (device: {self.device})", flush=True)
             first = max(self.cfg.eval_every * (self.cfg.start_steps // self.cfg.eval_every + 1),
                         self.cfg.eval_every)
-            print(f"curve.png there is redrawn at every evaluation: once in the warm-up, then "
-                  f"from step {first} on, every {self.cfg.eval_every} steps", flush=True)
+            warm_up = (f"once in the warm-up (step {self.cfg.eval_every}), then "
+                       if self.cfg.eval_every <= self.cfg.start_steps else "")
+            print(f"curve.png there is redrawn at every evaluation: {warm_up}from step {first} "
+                  f"on, every {self.cfg.eval_every} steps", flush=True)
             shipped = Path(__file__).resolve().parent / "docs" / f"{self.script}2d.pt"
             if self.cfg.env_id == "Walker2d-v5" and shipped.exists():
                 print(f"meanwhile, a trained walker (a 1M-step run's best actor): python "

@@ -158,11 +158,20 @@ def test_ddpg_update_by_hand_the_target_networks_give_the_td_target():
         torch.testing.assert_close(target, 0.5 * before + 0.5 * net.detach())
 
 
-def test_the_warm_up_is_evaluated_once_then_every_eval_every(tmp_path):
+def test_the_warm_up_is_evaluated_once_then_every_eval_every(tmp_path, capsys):
+    """The first line says when curve.png is redrawn, as it then happens: once in the warm-up
+    only where an evaluation falls in it (the README's InvertedPendulum command: none)."""
     result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1500,
                               start_steps=1000, eval_every=250, eval_episodes=1, gifs=False,
                               curves=False))
     assert [s for s, _, _ in result["evaluations"]] == [250, 1250, 1500]
+    assert "once in the warm-up (step 250), then from step 1250 on" in capsys.readouterr().out
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1500,
+                              start_steps=1000, eval_every=1250, eval_episodes=1, gifs=False,
+                              curves=False))
+    assert [s for s, _, _ in result["evaluations"]] == [1250]
+    out = capsys.readouterr().out
+    assert "from step 1250 on, every 1250 steps" in out and "warm-up" not in out.split("\n")[1]
 
 
 def test_eval_gif_writes_a_gif_of_a_saved_actor_without_a_display(tmp_path):
