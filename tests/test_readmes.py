@@ -13,7 +13,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 EN, ZH = ROOT / "README.md", ROOT / "README.zh-CN.md"
 RESULTS = ROOT / "docs" / "results.md"  # the measured results, the DDPG 1M table among them
-SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py")
+SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py",
+           "td3_walker.py")
 TUTORIAL_TITLES = (
     "PPO近段策略优化玩cartpole游戏",  # 000
     "强化学习PPO从理论到代码详解(2)---PPO1和PPO2",  # 001
@@ -191,7 +192,8 @@ def test_zh_hyperparameter_tables_match_each_config():
         "ppo_kl_cartpole.py": {"gamma", "lam", "d_targ", "kl_tolerance", "beta_init"},
         "actor_critic_cartpole.py": {"gamma", "learning_rate", "num_steps"},
         "ddpg_walker.py": {"gamma", "tau", "batch_size", "buffer_size", "actor_lr", "critic_lr",
-                           "expl_noise"}}
+                           "expl_noise"},
+        "td3_walker.py": {"policy_delay", "target_noise", "noise_clip"}}  # TD3's own flags
     for script, names in seen.items():
         twice = {name for name in names if names.count(name) > 1}
         assert not twice, f"{script}: twice in the tables {twice}"
