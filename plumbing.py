@@ -174,6 +174,8 @@ class OutputFlags:
         check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
         check_ranges(self, print_every="> 0", eval_episodes="> 0", threads="> 0")
         check(not self.gif or self.eval, "--gif writes a GIF of a saved policy: it needs --eval")
+        check(not self.gif or self.gif.lower().endswith(".gif"),
+              f"--gif writes a GIF: give a file name that ends in .gif, got {self.gif}")
 
 
 @dataclass
@@ -385,6 +387,9 @@ def load_checkpoint(path, required=(), script=None):
         raise UserError(f"{path} is not a model of {script}.py: it is " + (
             f"a model of {ckpt['script']}.py" if "script" in ckpt else
             "from an older version that did not record its script: train it again"))
+    if isinstance(ckpt, dict) and "buffer" in ckpt and not set(required) <= set(ckpt):
+        raise UserError(f"{path} is the run's checkpoint, for --resume {path.parent}; --eval "
+                        "plays model.pt or best.pt (or the run folder)")
     if not isinstance(ckpt, dict) or not set(required) <= set(ckpt):
         raise UserError(f"{path} is not a checkpoint of this script (it lacks {set(required)})")
     return ckpt

@@ -431,6 +431,21 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
     assert sorted(tmp_path.iterdir()) == [bad]  # no run folder left behind
 
 
+def test_eval_of_a_checkpoint_says_it_is_for_resume_and_gif_needs_a_gif_name(tmp_path):
+    """--eval RUN/checkpoint.pt names what the file is for; --gif OUT.png is refused, not
+    written as a GIF under a .png name. Each: one line, exit 2, nothing written."""
+    run = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
+                           start_steps=200, eval_every=300, eval_episodes=1,
+                           gifs=False))["run_dir"]
+    p = run_script("ddpg_walker.py", "--eval", run / "checkpoint.pt", timeout=120)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert f"for --resume {run}" in p.stderr
+    p = run_script("ddpg_walker.py", "--eval", run / "model.pt", "--gif", tmp_path / "out.png",
+                   timeout=120)
+    assert p.returncode == 2 and "ends in .gif" in p.stderr, p.stderr
+    assert not (tmp_path / "out.png").exists()
+
+
 def test_missing_mujoco_is_one_clear_line(tmp_path):
     code = ("import sys; sys.modules['mujoco'] = None\n"  # as if MuJoCo were not installed
             "import ddpg_walker; ddpg_walker.main(['--run-dir', sys.argv[1]])")
