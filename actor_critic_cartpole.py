@@ -18,7 +18,7 @@ After training, plumbing.Run.finish draws curve.png, evaluates pi and writes bef
 after.gif; --eval and --watch replay a saved model (plumbing.play).
 
     python actor_critic_cartpole.py                  # train until solved (under a minute on a CPU)
-    python actor_critic_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
+    python actor_critic_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
 
 中文导读：A2C（优势演员-评论员）：一个共享隐藏层接演员和评论员两个头，每采集一批数据就用
 n 步回报更新一次，不必等回合结束。配套教程：004，对照阅读见 README.zh-CN.md 的路线四。

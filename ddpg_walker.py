@@ -19,8 +19,8 @@ best evaluation so far) and curve.png, and every checkpoint_every steps a checkp
 from which --resume continues the very same run (plumbing.py writes them all).
 
     python ddpg_walker.py                         # 1M steps: several hours on a CPU
-    python ddpg_walker.py --resume runs/<run>     # continue a stopped or killed run exactly
-    python ddpg_walker.py --eval runs/<run>/best.pt --watch   # replay a saved actor
+    python ddpg_walker.py --resume runs/latest     # continue a stopped or killed run exactly
+    python ddpg_walker.py --eval runs/latest/best.pt --watch   # replay a saved actor
 
 中文导读：DDPG，连续动作的演员-评论员方法：确定性策略 μ(s)、经验回放、目标网络和软更新、
 高斯探索噪声。配套教程：003《【PyTorch深度强化学习】DDPG算法的讲解及实战(超详细 附源码)》，

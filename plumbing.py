@@ -254,6 +254,13 @@ def parse_config(cls, argv=None, description=None):
     if getattr(args, "watch", False) and HEADLESS:  # fail now, not after hours of training
         parser.error("--watch opens a window, but this machine has no display (see the GIFs, "
                      "or write one of a saved model: --eval RUN --gif OUT.gif)")
+    script = Path(inspect.getfile(cls)).stem  # the script whose Config this is
+    for name in ("eval", "resume"):  # runs/latest: this script's newest run folder there
+        if getattr(args, name, None):
+            try:
+                setattr(args, name, latest_run(getattr(args, name), script))
+            except UserError as e:
+                parser.error(str(e))
     try:
         cfg = cls(**vars(args))
     except ValueError as e:
@@ -263,6 +270,25 @@ def parse_config(cls, argv=None, description=None):
         print("warning: --cuda, but torch sees no GPU here (a CPU-only torch, or no driver): "
               "running on the CPU", file=sys.stderr, flush=True)  # as the scripts then do
     return cfg
+
+
+def latest_run(path, script):
+    """`path` with a part named `latest` (runs/latest, runs/latest/best.pt) read as the newest
+    run folder of `script` in that folder, by the time in its name; a path that exists as it
+    is stays as it is.
+
+    >>> latest_run("runs/ppo_cartpole__CartPole-v1__seed0__20260101-120000", "ppo_cartpole")
+    'runs/ppo_cartpole__CartPole-v1__seed0__20260101-120000'
+    """
+    parts = Path(path).parts
+    if "latest" not in parts or Path(path).exists():
+        return path
+    at = parts.index("latest")
+    parent = Path(*parts[:at]) if at else Path(".")
+    runs = sorted(parent.glob(f"{script}__*"), key=lambda run: run.name.split("__")[-1])
+    if not runs:
+        raise UserError(f"{path}: no run of {script}.py in {parent} yet")
+    return str(Path(runs[-1], *parts[at + 1:]))
 
 
 def _field_docs(klass):

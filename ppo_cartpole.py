@@ -12,7 +12,7 @@ After training, plumbing.Run.finish draws curve.png, evaluates pi and writes bef
 after.gif; --eval and --watch replay a saved model (plumbing.play).
 
     python ppo_cartpole.py                  # train until solved (tens of seconds on a CPU)
-    python ppo_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
+    python ppo_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
 
 中文导读：PPO-clip（近端策略优化的裁剪版本，教程里叫 PPO2），同策略算法。配套教程：
 000《PPO近段策略优化玩cartpole游戏》（“近段”应为“近端”）、

@@ -14,7 +14,7 @@ After training, plumbing.Run.finish draws curve.png, evaluates pi and writes bef
 after.gif; --eval and --watch replay a saved model (plumbing.play).
 
     python ppo_kl_cartpole.py                  # train until solved (tens of seconds on a CPU)
-    python ppo_kl_cartpole.py --eval runs/<run> --watch   # replay a saved model in a window
+    python ppo_kl_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
 
 中文导读：PPO-penalty（近端策略优化的 KL 惩罚版本，教程里叫 PPO1）：把 KL 散度作为惩罚项
 放进目标函数，每次更新后按 KL 的大小把惩罚系数 β 减半或加倍。配套教程：001 和 002，对照阅读

@@ -22,8 +22,8 @@ best evaluation so far) and curve.png, and every checkpoint_every steps a checkp
 from which --resume continues the very same run (plumbing.py writes them all).
 
     python td3_walker.py                          # 1M steps: several hours on a CPU
-    python td3_walker.py --resume runs/<run>      # continue a stopped or killed run exactly
-    python td3_walker.py --eval runs/<run>/best.pt --watch    # replay a saved actor
+    python td3_walker.py --resume runs/latest      # continue a stopped or killed run exactly
+    python td3_walker.py --eval runs/latest/best.pt --watch    # replay a saved actor
 
 中文导读：TD3（双延迟深度确定性策略梯度）是在 DDPG 上加的三处修改，用来抑制 DDPG 评论员对
 Q 值的高估：一、裁剪双 Q 学习：两个评论员，TD 目标取两个目标评论员估计中较小的一个；

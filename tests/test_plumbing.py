@@ -14,6 +14,7 @@ import torch
 
 import common
 import plumbing
+from conftest import run_script
 
 
 def a_run(tmp_path, threshold, **flags):
@@ -421,3 +422,33 @@ def test_cartpole_maps_are_the_networks_at_grid_points():
             assert maps["right"][i, j] == pytest.approx(torch.softmax(policy(obs), -1)[0, 1].item(),
                                                         rel=1e-5)
     assert maps["angle"][0] == -0.21 and maps["velocity"][-1] == 2.0
+
+
+def test_runs_latest_is_the_newest_run_of_this_script(tmp_path):
+    """runs/latest (and runs/latest/best.pt) name the newest run folder of the script, by the
+    time in its name, whatever the env or seed; another script's runs do not count."""
+    for name in ("ddpg_walker__Walker2d-v5__seed0__20260101-120000",
+                 "ddpg_walker__Hopper-v5__seed3__20260102-090000",
+                 "td3_walker__Walker2d-v5__seed0__20260105-000000"):
+        (tmp_path / name).mkdir()
+    newest = tmp_path / "ddpg_walker__Hopper-v5__seed3__20260102-090000"
+    assert plumbing.latest_run(str(tmp_path / "latest"), "ddpg_walker") == str(newest)
+    assert plumbing.latest_run(str(tmp_path / "latest" / "best.pt"), "ddpg_walker") == str(
+        newest / "best.pt")
+    with pytest.raises(plumbing.UserError, match="no run of ppo_cartpole.py"):
+        plumbing.latest_run(str(tmp_path / "latest"), "ppo_cartpole")
+
+
+def test_eval_runs_latest_from_the_command_line(tmp_path):
+    """The README's `--eval runs/latest` pastes as it is and plays the newest run."""
+    import ppo_cartpole
+
+    ppo_cartpole.train(ppo_cartpole.Config(total_timesteps=512, stop_when_solved=False,
+                                           gifs=False, curves=False, eval_episodes=1,
+                                           run_dir=str(tmp_path / "runs"), print_every=10**6))
+    p = run_script("ppo_cartpole.py", "--eval", "runs/latest", "--eval-episodes", 1,
+                   cwd=tmp_path, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "ppo_cartpole__CartPole-v1__seed0__" in p.stdout
+    p = run_script("ppo_cartpole.py", "--eval", "elsewhere/latest", cwd=tmp_path, timeout=120)
+    assert p.returncode == 2 and "no run of ppo_cartpole.py in elsewhere" in p.stderr
