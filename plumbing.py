@@ -909,7 +909,8 @@ class CheckpointedRun:
             return 0, obs
         step, obs = self._load_checkpoint()
         self._rewind_logs()
-        self.timer.update(step=step)
+        self.timer.update(step=step)  # the run's clock goes on from where it was saved:
+        self.timer["start"] -= self.saved_elapsed  # not from 0 at each --resume
         print(f"resumed {self.dir} at step {step} of {self.cfg.total_timesteps}", flush=True)
         return step, obs
 
@@ -991,6 +992,9 @@ class CheckpointedRun:
             plots.draw_inside(self.dir, self.script, asdict(cfg))
         if cfg.tensorboard:
             plots.to_tensorboard(self.dir, sps=self.timer["rate"])
+        # The next progress line's steps/s counts learning from here: not this evaluation
+        # (nor best.gif, nor the pictures), which the loop does between two lines.
+        self.timer.update(step=step, time=time.time())
 
     def _save_actor(self, path, step):
         save_model(path, self.script, self.cfg, step, {"actor": self.nets["actor"]}, **self.info)
@@ -1016,9 +1020,10 @@ class CheckpointedRun:
             cuda_rng=torch.cuda.get_rng_state() if buffer.obs.is_cuda else None,
             action_space_rng=self.env.action_space.np_random.bit_generator.state,  # warm-up
             env=env_state(self.env), episodes=self.episodes, evaluations=self.evaluations,
-            inside=self.inside), path)
+            inside=self.inside, elapsed=started - self.timer["start"]), path)
         print(f"checkpoint at step {step}: {path} ({path.stat().st_size / 2**20:.0f} MB, "
               f"written in {time.time() - started:.1f} s)", flush=True)
+        self.timer.update(step=step, time=time.time())  # steps/s: learning, not the write
 
     def _load_checkpoint(self):
         """Put back what _save_checkpoint saved; return the loop's (global_step, obs)."""
@@ -1040,6 +1045,7 @@ class CheckpointedRun:
         self.episodes[:], self.evaluations[:] = ckpt["episodes"], ckpt["evaluations"]
         nan = (float("nan"), float("nan"), 0)  # a checkpoint from before Q was logged
         self.inside[:] = ckpt.get("inside", [nan] * len(self.evaluations))
+        self.saved_elapsed = ckpt.get("elapsed", 0.0)  # seconds the run had run, if recorded
         return ckpt["global_step"], ckpt["obs"].numpy()
 
     def _rewind_logs(self):

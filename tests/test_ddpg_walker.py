@@ -488,3 +488,45 @@ def test_the_shipped_walker_walks():
     DDPG command replays it), still loads and walks: one episode without noise, >= 1000."""
     (ret,) = play(str(ROOT / "docs" / "ddpg_walker2d.pt"), 1)
     assert ret >= 1000, ret
+
+
+def test_steps_per_second_leave_out_the_evaluations_and_resume_keeps_the_clock(
+        tmp_path, monkeypatch, capsys):
+    """On a fake clock where every step costs the same and an evaluation costs 1000 s: every
+    progress line's steps/s is the same (the line after an evaluation does not count it), and
+    --resume goes on with the run's clock, not from 0."""
+    import time as real_time
+
+    class Clock:  # 0.01 s a call, plus what an evaluation costs
+        now = 1000.0
+
+        def time(self):
+            Clock.now += 0.01
+            return Clock.now
+
+        def __getattr__(self, name):
+            return getattr(real_time, name)
+
+    monkeypatch.setattr(plumbing, "time", Clock())
+    real_evaluate = common.evaluate
+
+    def slow_evaluate(*args, **kw):
+        Clock.now += 1000.0
+        return real_evaluate(*args, **kw)
+
+    monkeypatch.setattr(common, "evaluate", slow_evaluate)
+    cfg = small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1200, start_steps=300,
+                eval_every=400, print_every=100, eval_episodes=1, gifs=False, curves=False,
+                checkpoint_every=600)
+    ddpg.train(cfg)
+    lines = [line.split() for line in capsys.readouterr().out.splitlines()
+             if line.startswith("step") and "steps/s" in line]
+    rates = [float(words[2]) for words in lines]
+    assert len(rates) >= 8 and max(rates) - min(rates) <= 0.1 * max(rates), rates
+    run = next(tmp_path.iterdir())
+    ckpt = torch.load(run / "checkpoint.pt", weights_only=True)
+    assert ckpt["elapsed"] > 2000  # two evaluations of 1000 s on the run's clock
+    ddpg.train(ddpg.Config(resume=str(run), total_timesteps=1300))
+    last = [line for line in capsys.readouterr().out.splitlines() if line.startswith("step")][-1]
+    *hours, minutes, _ = last.split()[-1].split(":")  # the run's clock: [h:]mm:ss
+    assert int(hours[0] if hours else 0) * 60 + int(minutes) >= 33  # 2000 s on: not from 0
