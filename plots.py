@@ -374,7 +374,7 @@ def compare_figure(run_dirs):
             for steps, values in curves:  # each run's line ends where the run stopped
                 ax.plot(steps, values, color=f"C{color}", lw=2 if alone else 0.8,
                         alpha=1 if alone else 0.4)
-            label = f"{script}: 1 run"
+            label = f"{script}: {len(curves)} run{'s' if len(curves) > 1 else ''}"
             lo, hi = max(s[0] for s, _ in curves), min(s[-1] for s, _ in curves)
             if len(curves) > 1 and lo < hi:  # the mean where every run has a value: no stretch
                 grid = np.linspace(lo, hi, 200)
@@ -400,11 +400,14 @@ def compare_maps(run_dirs, out):
     maps.npz), a row per run, so that the scripts' critics and policies sit side by side."""
     plt, found = pyplot(), []
     for run_dir in map(Path, run_dirs):
-        if not (run_dir / "maps.npz").exists():
-            print(f"error: {run_dir} has no maps.npz (a CartPole run that finished training "
-                  "writes one)", file=sys.stderr)
-            sys.exit(2)
+        if not (run_dir / "maps.npz").exists():  # e.g. --no-curves, or a DDPG run: skipped
+            print(f"note: {run_dir} has no maps.npz (a CartPole run that finished training "
+                  "with its pictures writes one); left out", file=sys.stderr)
+            continue
         found.append((run_dir.name.split("__")[0], dict(np.load(run_dir / "maps.npz"))))
+    if not found:
+        print("error: none of these runs has a maps.npz", file=sys.stderr)
+        sys.exit(2)
     fig = plt.figure(figsize=(8, 3 * len(found)))
     grid = fig.add_gridspec(len(found), 1, hspace=0.5)
     for row, (script, m) in enumerate(found):

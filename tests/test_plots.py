@@ -154,7 +154,9 @@ def test_maps_of_several_runs_side_by_side(tmp_path):
     assert p.returncode == 0, p.stderr
     assert_curve_drawn(out)
     bad = run_script("plots.py", "--maps", tmp_path)
-    assert bad.returncode == 2 and "has no maps.npz" in bad.stderr
+    assert bad.returncode == 2 and "none of these runs has a maps.npz" in bad.stderr
+    skipped = run_script("plots.py", "--maps", *runs, tmp_path, "--out", out)  # one without
+    assert skipped.returncode == 0 and f"{tmp_path} has no maps.npz" in skipped.stderr
 
 
 class Lean(torch.nn.Module):
@@ -213,3 +215,17 @@ def test_the_maps_mark_the_states_of_the_runs_last_batches(tmp_path, monkeypatch
     np.testing.assert_array_equal(maps["visited"], expected)
     assert maps["true_value"].shape == (11, 11) and np.isfinite(maps["true_value"]).all()
     assert 0 < maps["true_value"].max() <= 1 / (1 - 0.99) * 0.05 + 1e-9  # scaled rewards
+
+
+def test_compare_legend_counts_every_run_drawn(tmp_path):
+    """Two DDPG runs, one with a single evaluation: the legend says 2 runs (it said 1)."""
+    import plots
+
+    for name, rows in (("ddpg_walker__Walker2d-v5__seed0__20260101-000000", [5000]),
+                       ("ddpg_walker__Walker2d-v5__seed1__20260101-000001", [5000, 10000, 15000])):
+        (tmp_path / name).mkdir()
+        lines = ["global_step,eval_mean,eval_std"] + [f"{s},{s / 100},1" for s in rows]
+        (tmp_path / name / "evaluations.csv").write_text("\n".join(lines) + "\n")
+    fig = plots.compare_figure(sorted(tmp_path.iterdir()))
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == ["ddpg_walker: 2 runs"], labels
