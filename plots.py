@@ -279,8 +279,9 @@ def map_panels(fig, cell, maps, title=""):
 
 
 def overestimation(ax, evaluations):
-    """DDPG (TD3 paper, Fig. 1): the critic's Q(s, mu(s)) against the discounted return mu
-    obtained from the same states, at each evaluation."""
+    """DDPG and TD3 (after the TD3 paper's Fig. 1, a variant: the states are the evaluations'):
+    the critic's Q(s, mu(s)) against the discounted return mu obtained from the same states,
+    at each evaluation."""
     x = evaluations["global_step"]
     ax.plot(x, evaluations["q_estimate"], color="C3", lw=1.5, label="critic: Q(s, mu(s))")
     ax.plot(x, evaluations["discounted_return"], color="C0", lw=1.5,

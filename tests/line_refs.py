@@ -32,9 +32,10 @@ def prose_lines(path):
     lines = {i + 1 for i, s in enumerate(source.splitlines()) if s.lstrip().startswith("#")}
     for node in ast.walk(ast.parse(source)):
         body = getattr(node, "body", None)
-        if (isinstance(body, list) and body and isinstance(body[0], ast.Expr)
-                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str)):
-            lines |= set(range(body[0].lineno, body[0].end_lineno + 1))
+        first = body[0] if isinstance(body, list) and body else None
+        if (isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+                and isinstance(first.value.value, str)):
+            lines |= set(range(first.lineno, first.end_lineno + 1))
     return lines
 
 
