@@ -15,6 +15,7 @@ import contextlib
 import csv
 import multiprocessing
 import os
+import re
 import statistics
 import sys
 import tempfile
@@ -50,21 +51,28 @@ def swapped(swaps):
             setattr(owner, name, old)
 
 
-def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, **settings):
+def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, record=None,
+        **settings):
     """{variant: [(steps, values, kept), one per seed]}: the train() of `script` (or of the
     variant's own "script") for each variant and seed, `budget` env steps, no solved stop, no
     GIFs. The values: the CartPole scripts' mean return of the last 20 episodes after each
     update; DDPG's evaluation returns. kept: {column: (steps, values)} for each of `columns`
     in the run's log (progress.csv, or DDPG's evaluations.csv). workers > 1: that many runs at
     once, each in a process of its own (forked, so a swap made here is there too). cluster:
-    {"folder": ..., "partition": ...} for submitit, one job per run (see on_cluster)."""
-    jobs = [(name, seed) for name in variants for seed in seeds]
+    {"folder": ..., "partition": ...} for submitit, one job per run (see on_cluster). record:
+    a folder where each run's log is kept the moment the run ends, and read back instead of
+    running again: an experiment stopped halfway (a time limit, Ctrl-C) goes on where it was."""
+    results = {job: recorded(record, job, columns) for name in variants for job in
+               [(name, seed) for seed in seeds] if recorded(record, job, columns) is not None}
+    for (name, seed), curve in results.items():
+        print(f"{name:40} seed {seed}: final {curve[1][-1]:6.1f}  (recorded)", flush=True)
+    jobs = [(name, seed) for name in variants for seed in seeds if (name, seed) not in results]
     with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
-        task = (script, variants, budget, columns, settings, tmp)
+        task = (script, variants, budget, columns, settings, tmp, record)
         if cluster is not None:
             done = on_cluster(task, jobs, **cluster)
             workers = 1  # no pool to close
-        elif workers == 1 or len(jobs) == 1:
+        elif workers == 1 or len(jobs) <= 1:
             done = (one_run(task, job) for job in jobs)
         else:  # a fresh process per run (maxtasksperchild=1): nothing carries from one to the next
             global _TASK
@@ -72,12 +80,11 @@ def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, **
             pool = multiprocessing.get_context("fork").Pool(min(workers, len(jobs)),
                                                            maxtasksperchild=1)
             done = pool.imap_unordered(_one_run_of_task, jobs)
-        results = {}
         for job, curve, seconds in done:
             results[job] = curve
             print(f"{job[0]:40} seed {job[1]}: final {curve[1][-1]:6.1f}  ({seconds:.0f} s)",
                   flush=True)
-        if workers > 1 and len(jobs) > 1:
+        if workers > 1 and len(jobs) > 1 and cluster is None:
             pool.close()
             pool.join()
     return {name: [results[(name, seed)] for seed in seeds] for name in variants}
@@ -85,7 +92,7 @@ def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, **
 
 def one_run(task, job):
     """One (variant, seed) run of `task`: (job, (steps, values, kept), seconds)."""
-    script, variants, budget, columns, settings, tmp = task
+    script, variants, budget, columns, settings, tmp, record = task
     name, seed = job
     variant = variants[name]
     module = variant.get("script", script)
@@ -98,7 +105,31 @@ def one_run(task, job):
     with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
         result = module.train(cfg)
     steps, values, _ = plots.curve_of(result["run_dir"])
+    if record is not None:  # kept at once: a later call reads it instead of running again
+        log = next(p for p in (Path(result["run_dir"]) / n for n in LOGS) if p.exists())
+        kept = record_dir(record, job)
+        kept.mkdir(parents=True, exist_ok=True)
+        (kept / f"{log.name}.tmp").write_bytes(log.read_bytes())
+        (kept / f"{log.name}.tmp").replace(kept / log.name)
     return job, (steps, values, kept_columns(result["run_dir"], columns)), time.time() - started
+
+
+LOGS = ("evaluations.csv", "progress.csv")  # DDPG's and TD3's log; the CartPole scripts'
+
+
+def record_dir(record, job):
+    """Where run `job` = (variant, seed) keeps its log in `record`."""
+    name, seed = job
+    return Path(record) / f"{re.sub(r'[^A-Za-z0-9]+', '_', name).strip('_')}__seed{seed}"
+
+
+def recorded(record, job, columns):
+    """The (steps, values, kept) of a run kept in `record`, or None if it is not there."""
+    folder = None if record is None else record_dir(record, job)
+    if folder is None or not any((folder / n).exists() for n in LOGS):
+        return None
+    steps, values, _ = plots.curve_of(folder)
+    return steps, values, kept_columns(folder, columns)
 
 
 _TASK = None  # run()'s task, for the forked workers
@@ -117,7 +148,7 @@ def on_cluster(task, jobs, folder, partition=None):
     paths = [str(ROOT), str(ROOT / "experiments"), os.environ.get("PYTHONPATH", "")]
     os.environ["PYTHONPATH"] = os.pathsep.join(p for p in paths if p)
     run_dir = Path(folder) / "runs"  # the runs' own folders: where the jobs can write
-    task = (*task[:-1], str(run_dir))
+    task = (*task[:5], str(run_dir), task[6])
     executor = submitit.AutoExecutor(folder=Path(folder) / "%j")
     executor.update_parameters(timeout_min=24 * 60, cpus_per_task=1, name="experiment",
                                **({"slurm_partition": partition} if partition else {}))
@@ -273,8 +304,9 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     if quick:  # quick_settings: overrides of `settings` that a quick budget needs
         seeds, budget, settings = seeds[:1], quick_budget, {**settings, **(quick_settings or {})}
         OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
+    record = None if quick else OUT / f"{name}_runs"  # each run's log, kept as it ends
     curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers, cluster,
-                 **settings)
+                 record, **settings)
     path = report(name, curves, solved, what, panels)
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
           f"{time.time() - started:.0f} s with {workers} worker(s); figure: {path}")

@@ -271,6 +271,27 @@ def test_the_cluster_path_gives_the_same_csvs_through_submitits_local_executor(t
     assert written["--workers"] == written["--cluster"]
 
 
+def test_each_run_is_kept_as_it_ends_and_not_run_again(tmp_path, monkeypatch):
+    """With a record folder, a run's log is kept the moment the run ends; a second call reads
+    it back (the same curves, value for value) instead of training again: an experiment cut
+    short goes on where it stopped."""
+    variants = {"original": {}, "variant: no norm": {"config": {"norm_adv": False}}}
+    first = lab.run(ppo_cartpole, variants, (0, 1), 512, ["approx_kl"], record=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "original__seed0", "original__seed1", "variant_no_norm__seed0", "variant_no_norm__seed1"]
+    (tmp_path / "original__seed1" / "progress.csv").unlink()  # as if cut short before it
+    ran = []
+    real = lab.one_run
+    monkeypatch.setattr(lab, "one_run", lambda task, job: (ran.append(job), real(task, job))[1])
+    again = lab.run(ppo_cartpole, variants, (0, 1), 512, ["approx_kl"], record=tmp_path)
+    assert ran == [("original", 1)]  # only the run whose log was missing
+    for name in variants:
+        for (s1, v1, k1), (s2, v2, k2) in zip(first[name], again[name]):
+            np.testing.assert_array_equal(s1, s2)
+            np.testing.assert_array_equal(v1, v2)
+            np.testing.assert_array_equal(k1["approx_kl"][1], k2["approx_kl"][1])
+
+
 def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
     """Each single-fix variant keeps one fix and turns the other two off; the first none."""
     import td3_walker
