@@ -62,8 +62,9 @@ def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, re
     {"folder": ..., "partition": ...} for submitit, one job per run (see on_cluster). record:
     a folder where each run's log is kept the moment the run ends, and read back instead of
     running again: an experiment stopped halfway (a time limit, Ctrl-C) goes on where it was."""
-    results = {job: recorded(record, job, columns) for name in variants for job in
-               [(name, seed) for seed in seeds] if recorded(record, job, columns) is not None}
+    kept = {(name, seed): recorded(record, (name, seed), columns)
+            for name in variants for seed in seeds}
+    results = {job: curve for job, curve in kept.items() if curve is not None}
     for (name, seed), curve in results.items():
         print(f"{name:40} seed {seed}: final {curve[1][-1]:6.1f}  (recorded)", flush=True)
     jobs = [(name, seed) for name in variants for seed in seeds if (name, seed) not in results]
