@@ -14,8 +14,7 @@ where PPO takes many behind its clip. The loop in train(), top to bottom:
              rollout's end and at time-limit truncations; advantages A_t = R_t - V(s_t)
     update   one gradient step on -log pi(a|s) * A + c_v * (R - V)^2 / 2 - c_e * entropy
     log      one progress.csv row per update; a progress line now and then
-After training, plumbing.Run.finish draws curve.png, evaluates pi and writes before.gif and
-after.gif; --eval and --watch replay a saved model (plumbing.play).
+After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_cartpole).
 
     python actor_critic_cartpole.py                  # train until solved (under a minute on a CPU)
     python actor_critic_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
@@ -25,20 +24,21 @@ n 步回报更新一次，不必等回合结束。配套教程：004，对照阅
 train() 里的循环：采集数据、算 n 步回报和优势、更新、记录（含平滑回报）。
 """
 
-import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
-
 import copy
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn as nn
 from torch.distributions import Categorical
 
+import checkpoints
+import cli
 import common
+import report
+import runlog
 
-SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+SCRIPT = "actor_critic_cartpole"  # names its run folders; saved in its models (it loads no other's)
 
 
 # ==== Networks ============================================================================
@@ -75,10 +75,9 @@ class ActorCritic(nn.Module):
 
 
 @dataclass
-class Config(plumbing.SolvedCheckFlags):
-    """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
-    --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and the solved check's
-    come from plumbing.SolvedCheckFlags."""
+class Config(cli.SolvedFlags):
+    """The algorithm's settings; the flags every script shares (--run-dir, --gifs, --eval,
+    --watch, --threads, ...) and the solved rule's come from cli.SolvedFlags."""
     # --- experiment ---
     env_id: str = "CartPole-v1"
     """gymnasium id of an env with a Box observation and Discrete actions"""
@@ -120,11 +119,14 @@ class Config(plumbing.SolvedCheckFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        plumbing.check_ranges(
+        cli.check_ranges(
             self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", hidden="> 0",
             learning_rate="> 0", ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0",
             gamma="(0, 1]", lam="[0, 1] or none", reward_scale="> 0 or none",
             running_reward_alpha="(0, 1]")
+        batch = self.num_envs * self.num_steps
+        cli.check(self.total_timesteps >= batch, f"--total-timesteps ({self.total_timesteps})"
+                  f" is less than one rollout (num_envs x num_steps = {batch})")
 
 
 # ==== Rollout buffer and loss =============================================================
@@ -204,7 +206,7 @@ def a2c_loss(model, data, cfg):
 
 def train(cfg: Config):
     """Train A2C with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
-    episode_returns, eval_returns, greedy_returns, interrupted (plumbing.Run.finish)."""
+    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_cartpole)."""
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
@@ -217,23 +219,23 @@ def train(cfg: Config):
     buffer = RolloutBuffer(T, N, obs_dim)
 
     model = ActorCritic(obs_dim, n_actions, cfg.hidden).to(device)
-    untrained = copy.deepcopy(model)  # before.gif is drawn from these weights after training
+    untrained = copy.deepcopy(model)  # before.gif and the maps: from these weights, at the end
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate, eps=1e-5)
     num_updates = cfg.total_timesteps // (T * N)
     default_scale = 1 - cfg.gamma if cfg.gamma < 1 else 1.0
     reward_scale = cfg.reward_scale if cfg.reward_scale is not None else default_scale
-    # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
-    run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(model=model), model, model,
-                       untrained, device, reward_scale=reward_scale, obs_dim=obs_dim,
-                       n_actions=n_actions)
+    # The run folder: progress.csv, a progress line with these numbers every print_every updates
+    run = runlog.UpdateLog(SCRIPT, cfg, shown=dict(
+        running_reward="6.1f", loss_pi="+.3f", loss_v=".2e", entropy=".3f"))
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
     autoreset = np.zeros(N, dtype=bool)
-    global_step = 0
+    global_step, checked, stopped = 0, 0, False
     running_reward, alpha = 0.0, cfg.running_reward_alpha  # tutorial 004's smoothed return
 
-    with run.until_interrupted():  # Ctrl-C ends the loop; model.pt and the logs are kept
+    # Ctrl-C ends the loop; either way, model.pt and episodes.csv are saved as training left them
+    with run.saving_model(dict(model=model), obs_dim=obs_dim, n_actions=n_actions):
         for update in range(1, num_updates + 1):
             if cfg.anneal_lr:  # lr_k = lr * (1 - (k - 1) / K): from lr at the first update toward 0
                 frac = 1 - (update - 1) / num_updates
@@ -254,10 +256,15 @@ def train(cfg: Config):
                 autoreset = terminated | truncated
                 for ep_return in run.episodes_ended(info, global_step):  # tutorial 004's
                     running_reward = alpha * ep_return + (1 - alpha) * running_reward  # smoothing
-                # Solved (mean of the last 20 returns)? Then pi as it is now plays eval_episodes
-                if run.solved_and_pi_holds(running_reward=running_reward):  # episodes; if it
-                    break  # holds too, training stops
-            if run.stopped:  # the partial rollout trains nothing
+                # Solved when the mean return of the last solved_window episodes reaches the
+                # threshold; then pi as it is now must too (at most one check per update)
+                if run.solved(threshold) and cfg.stop_when_solved and checked < update:
+                    checked = update  # pi plays eval_episodes episodes: does it hold?
+                    if stopped := report.pi_holds(lambda x: model(x)[0], device, cfg,
+                                                  threshold, global_step):
+                        break
+            if stopped:  # the partial rollout trains nothing; a last row says where it ended
+                run.stopped_row(running_reward=running_reward, lr=optimizer.param_groups[0]["lr"])
                 break
 
             # --- V of the whole rollout in one batch, then returns and advantages ---
@@ -278,19 +285,26 @@ def train(cfg: Config):
             if cfg.max_grad_norm > 0:
                 nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm)
             optimizer.step()
-            plumbing.stop_if_diverged(global_step, stats, (model,), run.dir, next_obs)
-            run.log(stats, visited=data["obs"], running_reward=running_reward)  # progress.csv
+            with torch.no_grad():  # nan or inf anywhere: stop, in one line
+                outputs = model(torch.as_tensor(next_obs, dtype=torch.float32, device=device))
+            runlog.stop_if_diverged(global_step, stats, (model,), run.dir, outputs)
+            run.update(stats, visited=data["obs"], running_reward=running_reward,
+                       lr=optimizer.param_groups[0]["lr"])
     envs.close()
-    return run.finish()  # curve.png, the evaluation after training, the GIFs
+    nets = {when: (lambda x, net=net: net(x)[0], lambda x, net=net: net(x)[1])  # for the maps:
+            for when, net in (("untrained", untrained), ("trained", model))}  # obs -> pi, V
+    return report.finish_cartpole(run, threshold, nets, device, reward_scale)
 
 
 def main(argv=None):
     """python actor_critic_cartpole.py [flags]: train (then --watch), or --eval a saved model."""
-    cfg = plumbing.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
-    with plumbing.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
-        saved = cfg.eval or plumbing.saved_model(train(cfg))  # after a Ctrl-C: exit 130
+    cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
+    with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        saved = cfg.eval or report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
-            plumbing.play(cfg, saved, SCRIPT, ActorCritic, "model")
+            model, env_id = checkpoints.load_model(saved, SCRIPT, "model", lambda ckpt: (
+                ActorCritic(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])))
+            report.play_policy(cfg, saved, env_id, lambda x: model(x)[0])
 
 
 if __name__ == "__main__":

@@ -1,13 +1,19 @@
 """What the scripts share and a reader reads beside them: discounted returns and GAE (with
-worked examples), running a policy (evaluation and off-screen GIFs) and making the envs.
+worked examples), running a policy (evaluation), what the pictures of inside.png measure,
+making the envs, and at the end the two small tools everything else builds on (one-line
+errors, whole-file writes). It imports no other module of this project.
 
 The training loops live in the scripts, each read top to bottom on its own. What a reader
-may skip (flags, logs, checkpoints, Ctrl-C) is in plumbing.py.
+may skip is in cli.py (flags), runlog.py (run folders, logs), checkpoints.py (saving, exact
+resume) and report.py (pictures, evaluations, GIFs, --eval).
 """
 
-import plumbing  # first: headless rendering settings, before gymnasium loads pygame or MuJoCo
-
+import contextlib
 import math
+import os
+import signal
+import sys
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -87,17 +93,16 @@ def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
 # =============================================================================
 
 
-def pi_actions(policy, device, seed, greedy=False):
+def pi_actions(logits_of, device, seed, greedy=False):
     """obs -> action of a categorical policy, for evaluation and GIFs: drawn from pi(.|s) as in
     training (and as tutorial 004 draws its GIFs), or with greedy=True pi's most probable action.
-    `policy` outputs the logits of pi, or a pair (logits, V) as an actor-critic does. The draws
-    come from their own generator, seeded with `seed`: an evaluation replays exactly."""
+    `logits_of` maps observations to the logits of pi. The draws come from their own
+    generator, seeded with `seed`: an evaluation replays exactly."""
     rng = np.random.default_rng(seed)
 
     def act(obs):
         with torch.no_grad():
-            out = policy(torch.as_tensor(obs, dtype=torch.float32, device=device))
-        logits = out[0] if isinstance(out, tuple) else out
+            logits = logits_of(torch.as_tensor(obs, dtype=torch.float32, device=device))
         if greedy:
             return int(logits.argmax())
         probs = torch.softmax(logits.double(), -1).cpu().numpy()  # float64: sums to 1 for numpy
@@ -121,7 +126,7 @@ def evaluate(env_id, policy, episodes, seed, render_mode=None, log=False, trajec
     `seed`. render_mode="human" shows a window (make_kw go to gym.make); log=True prints each
     return as its episode ends; a list `trajectories` receives each episode's observations,
     rewards and whether it terminated (rather than hit the time limit)."""
-    with plumbing.env_errors(env_id):
+    with env_errors(env_id):
         env = gym.make(env_id, render_mode=render_mode, **make_kw)
     returns = []
     try:
@@ -162,7 +167,7 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
     def frame():  # Image.reduce: each pixel the mean of a scale x scale block (thin lines stay)
         return np.asarray(PIL.Image.fromarray(env.render()).reduce(scale))
 
-    with plumbing.env_errors(env_id):
+    with env_errors(env_id):
         env = gym.make(env_id, render_mode="rgb_array", **make_kw)
     frames, total, t, done = [], 0.0, 0, False
     try:
@@ -176,9 +181,10 @@ def record_gif(env_id, policy, path, seed, max_frames=300, fps=30, every=1, scal
                 frames.append(frame())
     finally:
         env.close()
-    with plumbing.written_whole(path) as tmp:  # a Ctrl-C waits until the GIF is whole
+    with written_whole(path) as tmp:  # a Ctrl-C waits until the GIF is whole
         imageio.mimsave(tmp, frames, format="GIF", duration=1000 * every / fps, loop=0)
     return total
+
 
 
 # =============================================================================
@@ -273,16 +279,16 @@ def make_vec_env(env_id, num_envs, seed, solved_return=None):
 
     Autoreset is NEXT_STEP (gymnasium 1.x's default): the step after an episode ends is a reset
     step. RecordEpisodeStatistics puts each ended episode's return in info["episode"]."""
-    with plumbing.env_errors(env_id):
+    with env_errors(env_id):
         envs = gym.make_vec(env_id, num_envs)
         envs = gym.wrappers.vector.RecordEpisodeStatistics(envs)
         assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
         if not isinstance(envs.single_action_space, gym.spaces.Discrete):
-            raise plumbing.UserError(f"{env_id} has {type(envs.single_action_space).__name__} "
+            raise UserError(f"{env_id} has {type(envs.single_action_space).__name__} "
                                      "actions; this script needs Discrete actions")
         solved = envs.spec.reward_threshold if solved_return is None else solved_return
         if solved is None:
-            raise plumbing.UserError(f"{env_id} has no reward_threshold; pass --solved-return")
+            raise UserError(f"{env_id} has no reward_threshold; pass --solved-return")
         envs.action_space.seed(seed)
         obs, _ = envs.reset(seed=seed)
     return envs, obs, solved
@@ -291,15 +297,98 @@ def make_vec_env(env_id, num_envs, seed, solved_return=None):
 def make_continuous_env(env_id):
     """One MuJoCo env with Box actions, as DDPG needs (tutorial 003: one env). Its
     RecordEpisodeStatistics wrapper puts an ended episode's return in info["episode"]["r"]."""
-    with plumbing.env_errors(env_id):
+    with env_errors(env_id):
         env = gym.wrappers.RecordEpisodeStatistics(gym.make(env_id))
     if not isinstance(env.action_space, gym.spaces.Box):
         env.close()
-        raise plumbing.UserError(f"{env_id} has a {type(env.action_space).__name__} action "
+        raise UserError(f"{env_id} has a {type(env.action_space).__name__} action "
                                  "space; DDPG needs continuous (Box) actions")
     if not hasattr(env.unwrapped, "data"):  # checkpoints save MuJoCo's simulator state
         env.close()
-        raise plumbing.UserError(f"{env_id} is not a MuJoCo env; this script trains MuJoCo "
+        raise UserError(f"{env_id} is not a MuJoCo env; this script trains MuJoCo "
                                  "tasks (Walker2d-v5, Hopper-v5, HalfCheetah-v5, "
                                  "InvertedPendulum-v5, ...)")
     return env
+
+
+# =============================================================================
+# Tools the other modules build on: one-line errors, whole-file writes, headless rendering
+# =============================================================================
+
+
+class UserError(Exception):
+    """Bad input the user can fix: printed as one line, exit code 2 (cli.clear_exit)."""
+
+
+def from_ctrl_c(error):
+    """Is `error` a KeyboardInterrupt, or raised because of one (MuJoCo's import, a torch write)?"""
+    while error is not None and not isinstance(error, KeyboardInterrupt):
+        error = error.__cause__ or error.__context__  # Python keeps this chain free of loops
+    return error is not None
+
+
+def headless():
+    """Is this a Linux machine without a display (no window can open)?"""
+    return sys.platform == "linux" and not any(map(os.environ.get, ("DISPLAY", "WAYLAND_DISPLAY")))
+
+
+def headless_defaults():
+    """Without a display, pygame draws into memory and MuJoCo renders through EGL. Called
+    where an env is made, before pygame or MuJoCo load; never overrides the user's settings."""
+    if headless():
+        os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+        os.environ.setdefault("MUJOCO_GL", "egl")
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+
+
+@contextlib.contextmanager
+def env_errors(env_id):
+    """Makes an env (headless_defaults first): an unknown id, a missing extra or too little
+    memory becomes one clear UserError."""
+    headless_defaults()
+    try:
+        yield
+    except (ImportError, gym.error.DependencyNotInstalled) as e:  # e.g. no MuJoCo
+        if from_ctrl_c(e):  # Ctrl-C while MuJoCo was imported: no package is missing
+            raise KeyboardInterrupt from None
+        raise UserError(f"{env_id} needs a package that is not installed: {e}") from None
+    except gym.error.Error as e:  # NameNotFound, VersionNotFound, ...
+        raise UserError(f"unknown environment {env_id!r}: {e}") from None
+    except AttributeError as e:  # MuJoCo's import with MUJOCO_GL=egl finds no libEGL
+        if "egl" not in str(e).lower():
+            raise
+        raise UserError(f"{env_id}: MuJoCo cannot render without the EGL library (install "
+                        "libegl1, or set MUJOCO_GL=osmesa with OSMesa installed)") from None
+    except MemoryError:
+        raise UserError(f"not enough memory for {env_id} (too many envs or steps?)") from None
+
+
+@contextlib.contextmanager
+def ctrl_c_deferred():
+    """Hold a Ctrl-C back while the block runs (a file write), then deliver it."""
+    before, pressed = signal.getsignal(signal.SIGINT), []
+    try:
+        signal.signal(signal.SIGINT, lambda signum, frame: pressed.append(signum))
+    except (ValueError, TypeError):  # not the main thread, or a handler set outside Python
+        before = None
+    try:
+        yield
+    finally:
+        if before is not None:
+            signal.signal(signal.SIGINT, before)
+        if pressed:
+            signal.raise_signal(signal.SIGINT)  # the held Ctrl-C, now
+
+
+@contextlib.contextmanager
+def written_whole(path):
+    """Yield a path to write, then rename it to `path`: no half file nor .tmp, Ctrl-C or not."""
+    tmp = Path(f"{path}.tmp")
+    with ctrl_c_deferred():
+        try:
+            yield tmp
+            os.replace(tmp, path)
+        except OSError as e:
+            raise UserError(f"cannot write {path}: {e.strerror or e}") from None
+        finally:
+            tmp.unlink(missing_ok=True)

@@ -8,8 +8,7 @@ early stop at 1.5 x target_kl). The loop in train(), top to bottom:
     GAE      advantages A_t and value targets R_t = A_t + V(s_t)   (common.gae)
     update   a few epochs of shuffled minibatches on the clipped surrogate
     log      one progress.csv row per update; a progress line now and then
-After training, plumbing.Run.finish draws curve.png, evaluates pi and writes before.gif and
-after.gif; --eval and --watch replay a saved model (plumbing.play).
+After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_cartpole).
 
     python ppo_cartpole.py                  # train until solved (tens of seconds on a CPU)
     python ppo_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
@@ -20,20 +19,21 @@ after.gif; --eval and --watch replay a saved model (plumbing.play).
 README.zh-CN.md 的路线一、路线二。train() 里的循环四步：采集数据、算优势（GAE）、更新、记录。
 """
 
-import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
-
 import copy
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn as nn
 from torch.distributions import Categorical
 
+import checkpoints
+import cli
 import common
+import report
+import runlog
 
-SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+SCRIPT = "ppo_cartpole"  # names its run folders; saved in its models (it loads no other's)
 
 
 # ==== Networks ============================================================================
@@ -81,10 +81,9 @@ class ValueNetwork(nn.Module):
 
 
 @dataclass
-class Config(plumbing.SolvedCheckFlags):
-    """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
-    --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and the solved check's
-    come from plumbing.SolvedCheckFlags."""
+class Config(cli.SolvedFlags):
+    """The algorithm's settings; the flags every script shares (--run-dir, --gifs, --eval,
+    --watch, --threads, ...) and the solved rule's come from cli.SolvedFlags."""
     # --- experiment ---
     env_id: str = "CartPole-v1"
     """gymnasium id of an env with a Box observation and Discrete actions"""
@@ -136,14 +135,16 @@ class Config(plumbing.SolvedCheckFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        plumbing.check_ranges(
+        cli.check_ranges(
             self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", update_epochs="> 0",
             num_minibatches="> 0", hidden="> 0", learning_rate="> 0", reward_scale="> 0",
             ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0", gamma="(0, 1]", lam="[0, 1]",
             clip_coef="> 0", kl_stop_factor="> 0", target_kl="> 0 or none")
         batch = self.num_envs * self.num_steps
-        plumbing.check(self.num_minibatches <= batch, f"--num-minibatches "
-                       f"({self.num_minibatches}) exceeds the batch size ({batch})")
+        cli.check(self.num_minibatches <= batch, f"--num-minibatches "
+                  f"({self.num_minibatches}) exceeds the batch size ({batch})")
+        cli.check(self.total_timesteps >= batch, f"--total-timesteps ({self.total_timesteps})"
+                  f" is less than one rollout (num_envs x num_steps = {batch})")
 
 
 # ==== Rollout buffer, losses, update ======================================================
@@ -250,7 +251,7 @@ def ppo_update(policy, value_net, optimizer, data, cfg):
 
 def train(cfg: Config):
     """Train PPO-clip with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
-    episode_returns, eval_returns, greedy_returns, interrupted (plumbing.Run.finish)."""
+    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_cartpole)."""
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
@@ -264,21 +265,22 @@ def train(cfg: Config):
 
     policy = PolicyNetwork(obs_dim, n_actions, cfg.hidden).to(device)
     value_net = ValueNetwork(obs_dim, cfg.hidden).to(device)
-    untrained = copy.deepcopy(policy)  # before.gif is drawn from these weights after training
+    untrained, untrained_v = copy.deepcopy(policy), copy.deepcopy(value_net)  # before.gif, maps
     optimizer = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                  lr=cfg.learning_rate, eps=1e-5)
     num_updates = cfg.total_timesteps // (T * N)
-    # The run folder, its logs and model.pt, the solved check (plumbing: it never acts)
-    run = plumbing.Run(SCRIPT, cfg, threshold, optimizer, dict(policy=policy, value=value_net),
-                       policy, value_net, untrained, device, reward_scale=cfg.reward_scale,
-                       obs_dim=obs_dim, n_actions=n_actions)
+    # The run folder: progress.csv, a progress line with these numbers every print_every updates
+    run = runlog.UpdateLog(SCRIPT, cfg, shown=dict(
+        loss_pi="+.3f", loss_v=".2e", approx_kl=".4f", entropy=".3f", clipfrac=".3f"))
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
     autoreset = np.zeros(N, dtype=bool)
-    global_step = 0
+    global_step, checked, stopped = 0, 0, False
 
-    with run.until_interrupted():  # Ctrl-C ends the loop; model.pt and the logs are kept
+    # Ctrl-C ends the loop; either way, model.pt and episodes.csv are saved as training left them
+    with run.saving_model(dict(policy=policy, value=value_net), obs_dim=obs_dim,
+                          n_actions=n_actions):
         for update in range(1, num_updates + 1):
             if cfg.anneal_lr:  # lr_k = lr * (1 - (k - 1) / K): from lr at the first update toward 0
                 frac = 1 - (update - 1) / num_updates
@@ -298,10 +300,14 @@ def train(cfg: Config):
                              valid=~autoreset)
                 autoreset = terminated | truncated
                 run.episodes_ended(info, global_step)
-                # Solved (mean of the last 20 returns)? Then pi as it is now plays eval_episodes
-                if run.solved_and_pi_holds():  # episodes; if it holds too, training stops
-                    break
-            if run.stopped:  # the partial rollout trains nothing
+                # Solved when the mean return of the last solved_window episodes reaches the
+                # threshold; then pi as it is now must too (at most one check per update)
+                if run.solved(threshold) and cfg.stop_when_solved and checked < update:
+                    checked = update  # pi plays eval_episodes episodes: does it hold?
+                    if stopped := report.pi_holds(policy, device, cfg, threshold, global_step):
+                        break
+            if stopped:  # the partial rollout trains nothing; a last row says where it ended
+                run.stopped_row(lr=optimizer.param_groups[0]["lr"])
                 break
 
             # --- pi_old and V of the whole rollout in one batch, then advantages ---
@@ -332,19 +338,22 @@ def train(cfg: Config):
                 obs=rollout["obs"], act=rollout["actions"], logp=logp_old, adv=advantages,
                 ret=returns).items()}
             stats = ppo_update(policy, value_net, optimizer, data, cfg)
-            plumbing.stop_if_diverged(global_step, stats, (policy, value_net), run.dir, next_obs)
-            run.log(stats, visited=data["obs"])  # a progress.csv row; a line now and then
+            runlog.stop_if_diverged(global_step, stats, (policy, value_net), run.dir)
+            run.update(stats, visited=data["obs"], lr=optimizer.param_groups[0]["lr"])
     envs.close()
-    return run.finish()  # curve.png, the evaluation after training, the GIFs
+    nets = dict(untrained=(untrained, untrained_v), trained=(policy, value_net))  # the maps
+    return report.finish_cartpole(run, threshold, nets, device, cfg.reward_scale)
 
 
 def main(argv=None):
     """python ppo_cartpole.py [flags]: train (then --watch), or --eval a saved model."""
-    cfg = plumbing.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
-    with plumbing.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
-        saved = cfg.eval or plumbing.saved_model(train(cfg))  # after a Ctrl-C: exit 130
+    cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
+    with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        saved = cfg.eval or report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
-            plumbing.play(cfg, saved, SCRIPT, PolicyNetwork, "policy")
+            policy, env_id = checkpoints.load_model(saved, SCRIPT, "policy", lambda ckpt: (
+                PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])))
+            report.play_policy(cfg, saved, env_id, policy)
 
 
 if __name__ == "__main__":

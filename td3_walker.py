@@ -19,7 +19,8 @@ The rest is DDPG's, at the same settings. The loop in train(), top to bottom:
 
 The run folder keeps evaluations.csv, episodes.csv, model.pt, best.pt and best.gif (the
 best evaluation so far) and curve.png, and every checkpoint_every steps a checkpoint.pt
-from which --resume continues the very same run (plumbing.py writes them all).
+from which --resume continues the very same run (runlog.py, checkpoints.py and report.py
+write them).
 
     python td3_walker.py                          # 1M steps: several hours on a CPU
     python td3_walker.py --resume runs/latest      # continue a stopped or killed run exactly
@@ -32,8 +33,6 @@ Q 值的高估：一、裁剪双 Q 学习：两个评论员，TD 目标取两个
 DDPG（教程 003 与 README.zh-CN.md 的路线三），再用 diff 对照这三处修改。
 """
 
-import plumbing  # first: a Ctrl-C while torch loads is one line (plumbing.py: skip on a first read)
-
 import copy
 from dataclasses import dataclass
 from pathlib import Path
@@ -43,7 +42,11 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+import checkpoints
+import cli
 import common
+import report
+import runlog
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 
@@ -88,10 +91,10 @@ class Critic(nn.Module):
 
 
 @dataclass
-class Config(plumbing.CheckpointFlags):
+class Config(cli.CheckpointFlags):
     """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
     --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and --checkpoint-every and
-    --resume come from plumbing.CheckpointFlags."""
+    --resume come from cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env with Box actions (Walker2d-v5, Hopper-v5, HalfCheetah-v5,
@@ -137,20 +140,20 @@ class Config(plumbing.CheckpointFlags):
     """fix 3: that noise is clipped to +- this (same units)"""
 
     def __post_init__(self):
-        plumbing.check_mujoco(self.env_id)  # first: other flags' limits matter less than that
         super().__post_init__()  # the shared flags' checks
-        plumbing.check_ranges(
+        cli.check_mujoco(self.env_id)
+        cli.check_ranges(
             self, total_timesteps="> 0", batch_size="> 0", hidden="> 0", buffer_size="> 0",
             eval_every="> 0", actor_lr="> 0", critic_lr="> 0", expl_noise=">= 0",
             gamma="(0, 1]", tau="(0, 1]", policy_delay="> 0", target_noise=">= 0",
             noise_clip=">= 0")
         # The first update samples batch_size transitions: the warm-up must have stored that many.
-        plumbing.check(self.start_steps >= self.batch_size,
-                       f"--start-steps must be at least --batch-size ({self.batch_size}), "
-                       f"got {self.start_steps}")
-        plumbing.check(self.resume or self.total_timesteps > self.start_steps,
-                       f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
-                       f"({self.start_steps}): learning starts after the warm-up")
+        cli.check(self.start_steps >= self.batch_size,
+                  f"--start-steps must be at least --batch-size ({self.batch_size}), "
+                  f"got {self.start_steps}")
+        cli.check(self.resume or self.total_timesteps > self.start_steps,
+                  f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
+                  f"({self.start_steps}): learning starts after the warm-up")
 
 
 # ==== Replay buffer and update ============================================================
@@ -183,6 +186,21 @@ class ReplayBuffer:
         self.not_done[i] = 0.0 if terminated else 1.0
         self.ptr = (self.ptr + 1) % self.max_size  # wrap around: overwrite the oldest
         self.size = min(self.size + 1, self.max_size)
+
+    def state_dict(self):
+        """For checkpoint.pt: the filled rows of every tensor field, and where the ring is."""
+        return dict(ptr=self.ptr, size=self.size, **{key: x[:self.size].cpu().clone()
+                                                     for key, x in vars(self).items()
+                                                     if torch.is_tensor(x)})
+
+    def load_state_dict(self, state):
+        """--resume. A run extended by --total-timesteps may get a larger buffer: it fills on
+        after the saved rows."""
+        for key, x in vars(self).items():
+            if torch.is_tensor(x):
+                x[:state["size"]] = state[key].to(x.device)
+        full = state["size"] == self.max_size
+        self.ptr, self.size = (state["ptr"] if full else state["size"]), state["size"]
 
     def sample(self, batch_size):
         """A uniformly random minibatch of stored transitions:
@@ -272,9 +290,9 @@ def build(obs_dim, act_dim, low, high, cfg, device):
 
 def train(cfg: Config):
     """Train TD3 with `cfg` (or continue the run cfg.resume). Returns a dict: run_dir, global_step,
-    evaluations, episodes, steps_per_second and interrupted (plumbing.CheckpointedRun.finish)."""
+    evaluations, episodes, steps_per_second and interrupted (report.finish_walker)."""
     if cfg.resume:
-        cfg = plumbing.config_to_resume(cfg, SCRIPT)  # the saved run's settings
+        cfg = checkpoints.config_to_resume(cfg, SCRIPT)  # the saved run's settings
     # --- seeding and setup ---
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     torch.manual_seed(cfg.seed)  # the networks' init
@@ -294,16 +312,21 @@ def train(cfg: Config):
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
     half_width = torch.as_tensor((high - low) / 2, dtype=torch.float32, device=device)
     obs, _ = env.reset(seed=cfg.seed)
-    # The run folder, its logs, models and checkpoints (plumbing: it never acts). checkpoint.pt
-    # holds all that decides what comes next: the six networks, both optimizers, the buffer,
-    # the random generators, the env mid-episode, the logs; --resume puts it all back.
-    run = plumbing.CheckpointedRun(SCRIPT, cfg, nets, buffer, env, device, obs_dim=obs_dim,
-                                   act_dim=act_dim, low=low.tolist(), high=high.tolist())
-    global_step, obs = run.start(obs)
-    first_step, losses = global_step, None
+    # The run folder: episodes.csv, evaluations.csv, a progress line every print_every steps
+    run = runlog.EvaluationLog(SCRIPT, cfg, device)
+    actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
+    # checkpoint.pt holds the state_dict() of each of these: all that decides what comes next.
+    # --resume puts each back, and the run goes on exactly as if it had never stopped.
+    in_checkpoint = dict(nets, buffer=buffer, env=checkpoints.MujocoEnvState(env),
+                         rng=checkpoints.RandomState(env, device), log=run)
+    first_step = 0
+    if cfg.resume:  # where the run stopped: its step and the loop's obs
+        first_step, obs = checkpoints.resume(run.dir, SCRIPT, cfg, in_checkpoint)
+    global_step, losses = first_step, None
     actor_loss = torch.tensor(0.0)  # the progress line shows the last actor step's loss
 
-    with run.until_interrupted():  # Ctrl-C: the loop stops after its step, with a checkpoint
+    # A first Ctrl-C sets ctrl_c.pressed: the loop ends its step, writes a checkpoint and stops
+    with checkpoints.CtrlC() as ctrl_c:
         for global_step in range(first_step + 1, cfg.total_timesteps + 1):
             learning = global_step > cfg.start_steps  # after the random warm-up
             # --- act ---
@@ -331,7 +354,7 @@ def train(cfg: Config):
                 if global_step % cfg.policy_delay == 0:  # (one critic update per env step)
                     actor_loss = update_actor_and_targets(nets, batch[0], cfg)  # [0]: states
                 losses = (critic_loss, actor_loss)
-            run.print_progress(global_step, losses)  # every print_every steps; nan/inf: stop
+            run.progress(global_step, losses, (nets["actor"], nets["critic"]))  # nan/inf: stop
 
             # --- evaluate: mu(s) without noise, every eval_every steps (tutorial 003); during
             # the random warm-up only the first time, as the untrained baseline ---
@@ -339,21 +362,31 @@ def train(cfg: Config):
                 seen = []  # the evaluation's states and rewards: Q(s, mu(s)) against the return
                 returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
                                           cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
-                run.log_evaluation(global_step, returns, seen)  # evaluations.csv, model.pt, curve
-            run.checkpoint_when_due(global_step, obs)  # every checkpoint_every steps
-            if run.ctrl_c_pressed:  # stop where the step is whole (its checkpoint is written)
+                best = run.evaluation(global_step, returns, common.q_against_return(
+                    seen, actor, nets["critic"], cfg.gamma, device))  # evaluations.csv
+                report.after_evaluation(run, actor, best, device, actor_info)  # model.pt, best.pt
+            if (global_step % cfg.checkpoint_every == 0 or global_step == cfg.total_timesteps
+                    or ctrl_c.pressed):  # (a larger --total-timesteps can extend a run)
+                checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
+                                 in_checkpoint)
+                run.clock_from(global_step)  # steps/s: learning, not the write
+            if ctrl_c.pressed:  # stop where the step is whole (its checkpoint is written)
                 break
     env.close()
-    return run.finish(global_step, untrained)  # what was saved; before.gif and after.gif
+    # what was saved and how to go on; or before.gif and after.gif
+    return report.finish_walker(run, global_step, ctrl_c.pressed, untrained, actor, device)
 
 
 def main(argv=None):
     """python td3_walker.py [flags]: train (then --watch), --resume a run, or --eval an actor."""
-    cfg = plumbing.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
-    with plumbing.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
-        saved = cfg.eval or plumbing.saved_model(train(cfg))  # after a Ctrl-C: exit 130
-        if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
-            plumbing.play(cfg, saved, SCRIPT, Actor, "actor")
+    cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
+    with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        saved = cfg.eval or report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
+        if cfg.eval or cfg.watch:  # play the saved actor (in a window with --watch)
+            actor, env_id = checkpoints.load_model(saved, SCRIPT, "actor", lambda ckpt: Actor(
+                ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"],
+                np.array(ckpt["low"]), np.array(ckpt["high"])))
+            report.play_actor(cfg, saved, env_id, actor)
 
 
 if __name__ == "__main__":

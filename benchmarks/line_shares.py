@@ -6,7 +6,8 @@
     hyperparameters  the fields of the script's Config
     plumbing         the rest: imports, section banners, Config.__post_init__ (flag checks),
                      train()'s docstring and every statement in it that calls the run's log or
-                     plumbing (with what it holds, e.g. the solved stop's break), play(), main()
+                     the tools (runlog, report, checkpoints, cli), with what it holds (e.g. the
+                     solved stop's break), main()
 
     python benchmarks/line_shares.py            # the four scripts
 """
@@ -17,14 +18,17 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py")
+SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py",
+           "td3_walker.py")
 ALGORITHM_DEFS = ("layer_init", "PolicyNetwork", "ValueNetwork", "ActorCritic", "Actor", "Critic",
                   "RolloutBuffer", "ReplayBuffer", "compute_loss_pi", "compute_loss_v", "approx_kl",
                   "adapt_beta", "ppo_update", "a2c_targets", "a2c_loss", "soft_update", "td_target",
-                  "compute_loss_actor", "ddpg_update", "build")
+                  "compute_loss_actor", "ddpg_update", "build", "update_critics",
+                  "update_actor_and_targets")
 # In train(), a statement is plumbing when it calls the run's log or plumbing (a compound one:
 # when its first line does, and then all it holds); comment lines that name them are too.
-PLUMBING_IN_TRAIN = re.compile(r"\brun\b|plumbing\.|envs?\.close\(\)")
+PLUMBING_IN_TRAIN = re.compile(r"\b(run|ctrl_c|in_checkpoint)\b|\b(runlog|report|checkpoints|cli)\."
+                               r"|envs?\.close\(\)")
 
 
 def train_kinds(train, lines, kind):

@@ -59,10 +59,16 @@ def run(tree, script, flags, out):
     return run_dir
 
 
+# Columns renamed since (old name: new name): the same values under a name that says what
+# they hold (the solved rule's window is a setting, no longer always 20).
+RENAMED = {"return_mean20": "recent_return"}
+
+
 def same_old_columns(a, b):
-    """(same, new columns): every column of the older log `a` is in `b` with the same values,
-    row for row; columns that only `b` has are new (added, never changed)."""
+    """(same, new columns): every column of the older log `a` is in `b` (under its RENAMED
+    name) with the same values, row for row; columns that only `b` has are new."""
     rows_a, rows_b = (list(csv.DictReader(open(path))) for path in (a, b))
+    rows_a = [{RENAMED.get(k, k): v for k, v in row.items()} for row in rows_a]
     header_a = list(rows_a[0]) if rows_a else []
     header_b = list(rows_b[0]) if rows_b else []
     same = (len(rows_a) == len(rows_b) and header_b[:len(header_a)] == header_a

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 import torch
 
-import plumbing
+import checkpoints
+import report
 
 from conftest import ROOT, ctrl_c_default, interrupt, run_script
 
@@ -111,8 +112,11 @@ def test_eval_reloads_the_saved_model(script, tmp_path):
                                 gifs=False, curves=False, eval_episodes=4))
     model = result["run_dir"] / "model.pt"
     cfg = small(script, tmp_path, eval=str(model), eval_episodes=4)
-    net, key = (script.ActorCritic, "model") if hasattr(script, "ActorCritic") else (script.PolicyNetwork, "policy")
-    assert plumbing.play(cfg, cfg.eval, script.SCRIPT, net, key) == result["eval_returns"]
+    cls, key = (script.ActorCritic, "model") if hasattr(script, "ActorCritic") else (script.PolicyNetwork, "policy")
+    net, env_id = checkpoints.load_model(cfg.eval, script.SCRIPT, key, lambda c: cls(
+        c["obs_dim"], c["n_actions"], c["config"]["hidden"]))
+    logits_of = net if key == "policy" else (lambda x: net(x)[0])
+    assert report.play_policy(cfg, cfg.eval, env_id, logits_of) == result["eval_returns"]
     # The run folder stands for its model.pt.
     p = run_script(f"{script.__name__}.py", "--eval", result["run_dir"], "--eval-episodes", 4)
     assert p.returncode == 0, p.stderr

@@ -12,7 +12,6 @@ import pytest
 import torch
 
 import common
-import plumbing
 
 
 # --- brute-force references: explicit sums, one env column at a time ---------
@@ -183,16 +182,16 @@ def test_record_gif_returns_the_whole_episode_even_when_frames_are_capped(tmp_pa
 
 
 def test_env_errors_are_user_errors():
-    with pytest.raises(plumbing.UserError, match="unknown environment"):
+    with pytest.raises(common.UserError, match="unknown environment"):
         common.evaluate("NoSuchEnv-v0", lambda obs: 0, 1, 0)
-    with pytest.raises(plumbing.UserError, match="unknown environment"):
+    with pytest.raises(common.UserError, match="unknown environment"):
         common.make_vec_env("NoSuchEnv-v0", 2, 0)
-    with pytest.raises(plumbing.UserError, match="Discrete"):
+    with pytest.raises(common.UserError, match="Discrete"):
         common.make_vec_env("Pendulum-v1", 2, 0)
     import gymnasium as gym
 
     gym.register("CartPoleNoThreshold-v0", "gymnasium.envs.classic_control:CartPoleEnv")
-    with pytest.raises(plumbing.UserError, match="has no reward_threshold; pass --solved-return"):
+    with pytest.raises(common.UserError, match="has no reward_threshold; pass --solved-return"):
         common.make_vec_env("CartPoleNoThreshold-v0", 2, 0)
     assert common.make_vec_env("CartPoleNoThreshold-v0", 2, 0, solved_return=50)[2] == 50
     envs, obs, solved = common.make_vec_env("CartPole-v1", 2, 0)
@@ -201,9 +200,9 @@ def test_env_errors_are_user_errors():
 
 
 def test_make_continuous_env_refuses_discrete_actions_and_other_simulators():
-    with pytest.raises(plumbing.UserError, match="needs continuous \\(Box\\) actions"):
+    with pytest.raises(common.UserError, match="needs continuous \\(Box\\) actions"):
         common.make_continuous_env("CartPole-v1")
-    with pytest.raises(plumbing.UserError, match="is not a MuJoCo env"):
+    with pytest.raises(common.UserError, match="is not a MuJoCo env"):
         common.make_continuous_env("Pendulum-v1")
     env = common.make_continuous_env("InvertedPendulum-v5")
     assert env.action_space.shape == (1,)

@@ -13,14 +13,19 @@ import torch
 
 import common
 import ddpg_walker as ddpg
-import plumbing
+import checkpoints
+import report
+import runlog
+from common import UserError
 from conftest import ROOT, interrupt, run_script
 
 
 def play(path, episodes):
     """What --eval PATH does: the saved actor's returns over `episodes` episodes."""
     cfg = ddpg.Config(eval=str(path), eval_episodes=episodes)
-    return plumbing.play(cfg, cfg.eval, ddpg.SCRIPT, ddpg.Actor, "actor")
+    actor, env_id = checkpoints.load_model(cfg.eval, ddpg.SCRIPT, "actor", lambda c: ddpg.Actor(
+        c["obs_dim"], c["act_dim"], c["config"]["hidden"], np.array(c["low"]), np.array(c["high"])))
+    return report.play_actor(cfg, cfg.eval, env_id, actor)
 
 
 @pytest.mark.quick
@@ -190,7 +195,7 @@ def test_watch_window_follows_the_agent():
     on top of the env's own view settings."""
     import mujoco
 
-    kw = plumbing.watch_camera("Walker2d-v5")["default_camera_config"]
+    kw = report.watch_camera("Walker2d-v5")["default_camera_config"]
     assert kw["type"] == mujoco.mjtCamera.mjCAMERA_TRACKING and kw["distance"] == 4.0
 
 
@@ -273,13 +278,13 @@ def test_curve_is_redrawn_at_every_evaluation(tmp_path, monkeypatch):
     from test_cartpole_scripts import assert_curve_drawn
 
     seen = []
-    real_draw = plumbing.plots.draw_run
+    real_draw = report.plots.draw_run
 
     def draw(run_dir, *args):
         path = real_draw(run_dir, *args)
         seen.append(path.read_bytes())
         return path
-    monkeypatch.setattr(plumbing.plots, "draw_run", draw)
+    monkeypatch.setattr(report.plots, "draw_run", draw)
     result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=900,
                               start_steps=300, eval_every=300, eval_episodes=1, gifs=False))
     assert len(seen) == 3 and len(set(seen)) == 3  # one new picture per evaluation
@@ -305,7 +310,7 @@ def test_the_camera_follows_the_walker():
         env.close()
         return counts
 
-    start, moved = walker_pixels(**plumbing.CAMERA)
+    start, moved = walker_pixels(**report.CAMERA)
     assert start > 500 and moved > 0.5 * start
     assert walker_pixels()[1] < 50  # the default camera lost it: the test can tell
 
@@ -326,18 +331,36 @@ def pendulum_flags(**kw):
     return flags
 
 
+def assert_same_state(a, b, where="checkpoint"):
+    """Two saved states equal in every field, recursively: tensors bit for bit, numbers and
+    lists exactly."""
+    assert type(a) is type(b), where
+    if isinstance(a, dict):
+        assert a.keys() == b.keys(), where
+        for key in a:
+            assert_same_state(a[key], b[key], f"{where}[{key!r}]")
+    elif isinstance(a, (list, tuple)):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same_state(x, y, f"{where}[{i}]")
+    elif torch.is_tensor(a):
+        assert a.dtype == b.dtype and torch.equal(a, b), where
+    else:
+        assert a == b or a != a and b != b, where  # nan == nan here
+
+
 def assert_same_run(a, b):
-    """Same logs byte for byte, same final weights bit for bit (every network, both optimizers)."""
+    """Same logs byte for byte, and the same checkpoint in every field of every object it
+    holds (networks, optimizers, replay buffer, env, random generators, logs), but the
+    run's clock."""
     for name in ("evaluations.csv", "episodes.csv"):
         assert (a / name).read_bytes() == (b / name).read_bytes(), name
     ca, cb = (torch.load(d / "checkpoint.pt", weights_only=True) for d in (a, b))
-    assert ca["global_step"] == cb["global_step"]
-    for key in ("actor", "critic", "actor_target", "critic_target"):
-        for name, tensor in ca[key].items():
-            assert torch.equal(cb[key][name], tensor), (key, name)
-    for key in ("actor_opt", "critic_opt"):
-        for i, state in ca[key]["state"].items():
-            assert all(torch.equal(cb[key]["state"][i][k], v) for k, v in state.items()), key
+    for ckpt in (ca, cb):
+        ckpt["log"].pop("elapsed")
+        ckpt["config"].pop("resume")  # the resumed run names its folder
+        ckpt["config"].pop("run_dir")
+    assert_same_state(ca, cb)
 
 
 @pytest.fixture(scope="module")
@@ -389,9 +412,9 @@ def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbro
 
     run = tmp_path / "run"
     shutil.copytree(unbroken["run_dir"], run)
-    with pytest.raises(plumbing.UserError, match="already ran 2400 steps"):
+    with pytest.raises(UserError, match="already ran 2400 steps"):
         ddpg.train(ddpg.Config(resume=str(run)))
-    with pytest.raises(plumbing.UserError, match="--actor-lr 0.001 differs from the saved 0.0003"):
+    with pytest.raises(UserError, match="--actor-lr 0.001 differs from the saved 0.0003"):
         ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700, actor_lr=1e-3))
     result = ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))
     assert [s for s, _, _ in result["evaluations"]][-2:] == [2400, 2700]
@@ -507,7 +530,7 @@ def test_steps_per_second_leave_out_the_evaluations_and_resume_keeps_the_clock(
         def __getattr__(self, name):
             return getattr(real_time, name)
 
-    monkeypatch.setattr(plumbing, "time", Clock())
+    monkeypatch.setattr(runlog, "time", Clock())
     real_evaluate = common.evaluate
 
     def slow_evaluate(*args, **kw):
@@ -525,7 +548,7 @@ def test_steps_per_second_leave_out_the_evaluations_and_resume_keeps_the_clock(
     assert len(rates) >= 8 and max(rates) - min(rates) <= 0.1 * max(rates), rates
     run = next(tmp_path.iterdir())
     ckpt = torch.load(run / "checkpoint.pt", weights_only=True)
-    assert ckpt["elapsed"] > 2000  # two evaluations of 1000 s on the run's clock
+    assert ckpt["log"]["elapsed"] > 2000  # two evaluations of 1000 s on the run's clock
     ddpg.train(ddpg.Config(resume=str(run), total_timesteps=1300))
     last = [line for line in capsys.readouterr().out.splitlines() if line.startswith("step")][-1]
     *hours, minutes, _ = last.split()[-1].split(":")  # the run's clock: [h:]mm:ss

@@ -9,7 +9,7 @@ import pytest
 import torch
 
 import common
-import plumbing
+import report
 from conftest import ROOT
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
@@ -57,7 +57,7 @@ def test_a_solved_run_stops_only_once_pi_as_it_is_now_holds(name, tmp_path, monk
         checks.append(step)
         return len(checks) == 3  # the first two checks find pi falling short
 
-    monkeypatch.setattr(plumbing, "pi_holds", holds)
+    monkeypatch.setattr(report, "pi_holds", holds)
     result = script.train(script.Config(run_dir=str(tmp_path), solved_return=30, gifs=False,
                                         curves=False, eval_episodes=1, print_every=10**6))
     assert result["solved"] and len(checks) == 3
@@ -75,7 +75,7 @@ def test_the_check_plays_the_current_pi(name, capsys):
     cfg = script.Config(eval_episodes=3)
     torch.manual_seed(0)  # an init whose greedy policy falls at once (some balance for 500)
     net = (script.PolicyNetwork(4, 2, cfg.hidden) if hasattr(script, "PolicyNetwork")
-           else script.ActorCritic(4, 2, cfg.hidden))
-    assert plumbing.pi_holds(net, "cpu", cfg, 10, step=0)
-    assert not plumbing.pi_holds(net, "cpu", cfg, 475, step=0)
+           else (lambda model: lambda x: model(x)[0])(script.ActorCritic(4, 2, cfg.hidden)))
+    assert report.pi_holds(net, "cpu", cfg, 10, step=0)
+    assert not report.pi_holds(net, "cpu", cfg, 475, step=0)
     assert "check at step 0: pi as it is now averages" in capsys.readouterr().out

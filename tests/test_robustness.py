@@ -61,24 +61,6 @@ def one_line(stderr, needle):
 
 # --- Ctrl-C --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("script,module", [(s, "torch") for s in CARTPOLE]
-                         + [("ppo_cartpole", "gymnasium")])
-def test_ctrl_c_while_the_imports_load(script, module, tmp_path):
-    """The first second of a run: torch and gymnasium are being imported."""
-    env = hooked(tmp_path, f'''
-        class CtrlC:  # Ctrl-C as {module} starts to import
-            def find_spec(self, name, path=None, module=None):
-                if name == "{module}":
-                    sys.meta_path.remove(self)
-                    signal.raise_signal(signal.SIGINT)
-        sys.meta_path.insert(0, CtrlC())
-    ''')
-    p = run_script(f"{script}.py", "--run-dir", tmp_path, *QUICK, env=env, timeout=120)
-    assert p.returncode == 130, p.stderr
-    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
-    assert run_folders(tmp_path) == []
-
-
 def test_ctrl_c_while_mujoco_is_imported_is_no_missing_package(tmp_path):
     """A Ctrl-C inside MuJoCo's C import comes out of gym.make as DependencyNotInstalled from
     ImportError("initialization failed") from KeyboardInterrupt: it is a Ctrl-C."""

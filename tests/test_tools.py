@@ -1,4 +1,5 @@
-"""Unit tests of plumbing.py: flags, run folders, CSV rows, checkpoints, one-line errors,
+"""Unit tests of the tools the scripts call (cli.py, runlog.py, checkpoints.py, report.py and
+the last part of common.py): flags, run folders, CSV rows, checkpoints, one-line errors,
 Ctrl-C, the divergence check and the run's episode bookkeeping."""
 
 import csv
@@ -12,8 +13,12 @@ import numpy as np
 import pytest
 import torch
 
+import checkpoints
+import cli
 import common
-import plumbing
+import report
+import runlog
+from common import UserError
 from conftest import run_script
 
 
@@ -21,12 +26,9 @@ def a_run(tmp_path, threshold, **flags):
     cfg = dataclasses.make_dataclass("Cfg", [("env_id", str, "CartPole-v1"), ("seed", int, 0),
                                       ("num_envs", int, 4), ("num_steps", int, 8),
                                       ("total_timesteps", int, 1000)],
-                                     bases=(plumbing.SolvedCheckFlags,))(
+                                     bases=(cli.SolvedFlags,))(
         **{"run_dir": str(tmp_path), "stop_when_solved": False, **flags})
-    net = torch.nn.Linear(4, 2)
-    opt = torch.optim.Adam(net.parameters())
-    return plumbing.Run("test", cfg, threshold, opt, dict(policy=net), net, net, net, "cpu",
-                        obs_dim=4, n_actions=2)
+    return runlog.UpdateLog("test", cfg, shown={})
 
 
 @pytest.mark.quick
@@ -49,8 +51,8 @@ def test_the_runs_episodes_and_solved_step_match_hand_kept_returns(tmp_path):
             running[n] = 0.0
         reset_step = term | trunc
         assert run.episodes_ended(info, step) == ended
-        assert run.solved_and_pi_holds() is False  # stop_when_solved is off: never stops
         last = [r for _, r in by_hand[-20:]]
+        assert run.solved(22.0) == (len(last) == 20 and np.mean(last) >= 22.0)
         if first_solved is None and len(last) == 20 and np.mean(last) >= 22.0:
             first_solved = step
         assert run.episodes == by_hand and run.solved_step == first_solved
@@ -59,17 +61,16 @@ def test_the_runs_episodes_and_solved_step_match_hand_kept_returns(tmp_path):
 
 
 @pytest.mark.quick
-def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path, monkeypatch):
-    """log() writes the step, episodes, mean of the last 20, the extra columns, lr, then the
+def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path):
+    """update() writes the step, episodes, mean of the last 20, the extra columns, then the
     stats; a stop writes one more row with the stats as nan and the rest as they are now."""
     run = a_run(tmp_path, threshold=10.0, stop_when_solved=True)
     run.episodes = [(i, 12.0) for i in range(20)]
     run.global_step = 64
-    run.log(dict(loss_pi=0.5, loss_v=0.25), running_reward=3.0)
-    monkeypatch.setattr(plumbing, "pi_holds", lambda *args: True)
-    run.optimizer.param_groups[0]["lr"] = 0.5
+    run.update(dict(loss_pi=0.5, loss_v=0.25), running_reward=3.0, lr=0.001)
     run.global_step = 70
-    assert run.solved_and_pi_holds(running_reward=4.0)
+    assert run.solved(10.0)
+    run.stopped_row(running_reward=4.0, lr=0.5)
     rows = list(csv.DictReader(open(run.dir / "progress.csv")))
     assert rows == [dict(global_step="64", episodes="20", return_mean20="12", running_reward="3",
                          lr="0.001", loss_pi="0.5", loss_v="0.25"),
@@ -86,11 +87,11 @@ def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path, monkeypatch
 def test_check_ranges_accepts_inside_and_names_the_flag_outside(rule, good, bad):
     words = {"> 0": "positive", "(0, 1]": "in (0, 1]", "[0, 1]": "in [0, 1]"}
     for value in good:
-        plumbing.check_ranges(dataclasses.make_dataclass("C", ["target_kl"])(value), target_kl=rule)
+        cli.check_ranges(dataclasses.make_dataclass("C", ["target_kl"])(value), target_kl=rule)
     for value in bad + ([] if "none" in rule else [None]):
         expected = words.get(rule.removesuffix(" or none"), rule.removesuffix(" or none"))
         with pytest.raises(ValueError, match=re.escape(f"--target-kl must be {expected}")):
-            plumbing.check_ranges(dataclasses.make_dataclass("C", ["target_kl"])(value),
+            cli.check_ranges(dataclasses.make_dataclass("C", ["target_kl"])(value),
                                 target_kl=rule)
 
 
@@ -111,15 +112,15 @@ class Demo:
     name: str = "x"
 
     def __post_init__(self):
-        plumbing.check(self.num_envs > 0, f"--num-envs must be positive, got {self.num_envs}")
+        cli.check(self.num_envs > 0, f"--num-envs must be positive, got {self.num_envs}")
 
 
 @pytest.mark.quick
 def test_parse_config_flags_and_defaults():
-    assert plumbing.parse_config(Demo, []) == Demo()
-    cfg = plumbing.parse_config(Demo, ["--num-envs", "8", "--lr", "3e-4", "--no-fast", "--target-kl", "0.02", "--name", "y"])
+    assert cli.parse_config(Demo, []) == Demo()
+    cfg = cli.parse_config(Demo, ["--num-envs", "8", "--lr", "3e-4", "--no-fast", "--target-kl", "0.02", "--name", "y"])
     assert cfg == Demo(num_envs=8, lr=3e-4, fast=False, target_kl=0.02, name="y")
-    assert plumbing.parse_config(Demo, ["--target-kl", "none"]).target_kl is None
+    assert cli.parse_config(Demo, ["--target-kl", "none"]).target_kl is None
 
 
 @pytest.mark.parametrize("argv,needle", [(["--num-envs", "0"], "--num-envs must be positive"),
@@ -131,7 +132,7 @@ def test_parse_config_flags_and_defaults():
 @pytest.mark.quick
 def test_parse_config_rejects_bad_values_with_exit_2(argv, needle, capsys):
     with pytest.raises(SystemExit) as e:
-        plumbing.parse_config(Demo, argv)
+        cli.parse_config(Demo, argv)
     assert e.value.code == 2
     err = capsys.readouterr().err
     assert needle in err and len(err.strip().splitlines()) == 1
@@ -140,7 +141,7 @@ def test_parse_config_rejects_bad_values_with_exit_2(argv, needle, capsys):
 @pytest.mark.quick
 def test_help_shows_docstrings(capsys):
     with pytest.raises(SystemExit):
-        plumbing.parse_config(Demo, ["--help"])
+        cli.parse_config(Demo, ["--help"])
     out = capsys.readouterr().out
     assert "--num-envs" in out and "parallel envs" in out and "learning rate" in out
 
@@ -154,7 +155,7 @@ class Percent:
 @pytest.mark.quick
 def test_help_survives_a_percent_sign(capsys):
     with pytest.raises(SystemExit) as e:
-        plumbing.parse_config(Percent, ["--help"])
+        cli.parse_config(Percent, ["--help"])
     assert e.value.code == 0
     assert "in % of it (50% = half)" in capsys.readouterr().out
 
@@ -164,8 +165,8 @@ def test_help_survives_a_percent_sign(capsys):
 
 @pytest.mark.quick
 def test_make_run_dir_names_and_never_reuses(tmp_path):
-    a = plumbing.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
-    b = plumbing.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
+    a = runlog.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
+    b = runlog.make_run_dir(tmp_path, "ppo_cartpole", "CartPole-v1", 3)
     assert a != b and a.is_dir() and b.is_dir()
     assert a.name.startswith("ppo_cartpole__CartPole-v1__seed3__")
 
@@ -174,62 +175,67 @@ def test_make_run_dir_names_and_never_reuses(tmp_path):
 def test_make_run_dir_unwritable_is_a_user_error(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    with pytest.raises(plumbing.UserError, match="cannot create run folder"):
-        plumbing.make_run_dir(blocker / "runs", "x", "CartPole-v1", 0)
+    with pytest.raises(UserError, match="cannot create run folder"):
+        runlog.make_run_dir(blocker / "runs", "x", "CartPole-v1", 0)
 
 
 @pytest.mark.quick
 def test_append_csv(tmp_path):
     path = tmp_path / "p.csv"
-    plumbing.append_csv(path, dict(step=1, loss=0.5))
-    plumbing.append_csv(path, dict(step=2, loss=0.25))
+    runlog.append_csv(path, dict(step=1, loss=0.5))
+    runlog.append_csv(path, dict(step=2, loss=0.25))
     assert path.read_text().splitlines() == ["step,loss", "1,0.5", "2,0.25"]
 
 
 @pytest.mark.quick
 def test_checkpoint_round_trip_and_bad_files(tmp_path):
     path = tmp_path / "m.pt"
-    plumbing.save_checkpoint(dict(w=torch.arange(3.0), config=dict(a=1)), path)
-    ckpt = plumbing.load_checkpoint(path, required=("w", "config"))
+    checkpoints.save_checkpoint(dict(w=torch.arange(3.0), config=dict(a=1)), path)
+    ckpt = checkpoints.load_checkpoint(path, required=("w", "config"))
     assert torch.equal(ckpt["w"], torch.arange(3.0)) and not (tmp_path / "m.pt.tmp").exists()
-    with pytest.raises(plumbing.UserError, match="lacks {'policy'}"):
-        plumbing.load_checkpoint(path, required=("policy",))
-    with pytest.raises(plumbing.UserError, match="no checkpoint"):
-        plumbing.load_checkpoint(tmp_path / "nope.pt")
+    with pytest.raises(UserError, match="lacks {'policy'}"):
+        checkpoints.load_checkpoint(path, required=("policy",))
+    with pytest.raises(UserError, match="no checkpoint"):
+        checkpoints.load_checkpoint(tmp_path / "nope.pt")
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"\x00garbage" * 10)
-    with pytest.raises(plumbing.UserError, match="truncated, corrupt or not a checkpoint"):
-        plumbing.load_checkpoint(bad)
+    with pytest.raises(UserError, match="truncated, corrupt or not a checkpoint"):
+        checkpoints.load_checkpoint(bad)
     half = tmp_path / "half.pt"  # a copy cut short: torch itself says "Invalid argument" or so
     half.write_bytes(path.read_bytes()[:100])
-    with pytest.raises(plumbing.UserError, match="truncated, corrupt or not a checkpoint"):
-        plumbing.load_checkpoint(half)
+    with pytest.raises(UserError, match="truncated, corrupt or not a checkpoint"):
+        checkpoints.load_checkpoint(half)
     # A pickle with Python objects in it is refused, and nothing suggests weights_only=False.
     unsafe = tmp_path / "unsafe.pt"
     torch.save(dict(w=Demo()), unsafe)
-    with pytest.raises(plumbing.UserError, match="not a checkpoint of these scripts") as e:
-        plumbing.load_checkpoint(unsafe)
+    with pytest.raises(UserError, match="not a checkpoint of these scripts") as e:
+        checkpoints.load_checkpoint(unsafe)
     assert "weights_only" not in str(e.value)
     # A run folder stands for its model.pt; a folder without one says so.
-    plumbing.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "model.pt")
-    assert torch.equal(plumbing.load_checkpoint(tmp_path)["w"], torch.ones(1))
-    with pytest.raises(plumbing.UserError, match="no checkpoint at .*empty.model.pt"):
+    checkpoints.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "model.pt")
+    assert torch.equal(checkpoints.load_checkpoint(tmp_path)["w"], torch.ones(1))
+    with pytest.raises(UserError, match="no checkpoint at .*empty.model.pt"):
         (tmp_path / "empty").mkdir()
-        plumbing.load_checkpoint(tmp_path / "empty")
+        checkpoints.load_checkpoint(tmp_path / "empty")
 
 
 @pytest.mark.quick
-def test_save_checkpoint_flushes_to_disk_before_the_rename(tmp_path, monkeypatch):
-    calls = []
-    real_fsync, real_replace = plumbing.os.fsync, plumbing.os.replace
-    monkeypatch.setattr(plumbing.os, "fsync", lambda fd: (calls.append("fsync"), real_fsync(fd))[1])
-    monkeypatch.setattr(plumbing.os, "replace", lambda a, b: (calls.append("replace"), real_replace(a, b))[1])
-    plumbing.save_checkpoint(dict(w=torch.ones(2)), tmp_path / "m.pt")
-    assert calls == ["fsync", "replace"]
+def test_save_checkpoint_is_on_disk_whole_before_it_takes_its_name(tmp_path, monkeypatch):
+    """When the file is flushed to disk, it is complete and not yet at its name: a crash then
+    leaves the previous checkpoint, never a half one."""
+    seen, real_fsync = [], os.fsync
+
+    def fsync(fd):
+        real_fsync(fd)
+        seen.append((os.path.exists(tmp_path / "m.pt"), os.fstat(fd).st_size))
+
+    monkeypatch.setattr(checkpoints.os, "fsync", fsync)
+    checkpoints.save_checkpoint(dict(w=torch.ones(2)), tmp_path / "m.pt")
+    assert seen == [(False, (tmp_path / "m.pt").stat().st_size)]
 
 
 @pytest.mark.parametrize("body,code,stderr", [
-    ("raise plumbing.UserError('something the user can fix')", 2, "error: something the user can fix\n"),
+    ("raise common.UserError('something the user can fix')", 2, "error: something the user can fix\n"),
     ("raise KeyboardInterrupt", 130, "\ninterrupted (Ctrl-C)\n"),
     # torch.save cut short by Ctrl-C; MuJoCo's import cut short by it, as gym.make reports it
     ("raise RuntimeError('unexpected pos') from KeyboardInterrupt()", 130,
@@ -237,9 +243,9 @@ def test_save_checkpoint_flushes_to_disk_before_the_rename(tmp_path, monkeypatch
     ("raise RuntimeError('a bug, no Ctrl-C in it')", 1, None),  # stays a traceback
 ])
 def test_clear_exit_prints_one_line(tmp_path, body, code, stderr):
-    program = f"import plumbing\nwith plumbing.clear_exit():\n    {body}\n"
+    program = f"import cli, common\nwith cli.clear_exit():\n    {body}\n"
     p = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, cwd=tmp_path,
-                       env={"PYTHONPATH": str(__import__("pathlib").Path(plumbing.__file__).parent), "PATH": ""})
+                       env={"PYTHONPATH": str(__import__("pathlib").Path(cli.__file__).parent), "PATH": ""})
     assert p.returncode == code
     assert p.stderr == stderr if stderr else "Traceback" in p.stderr
 
@@ -250,8 +256,9 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
     import os
 
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER", "MUJOCO_GL")}
-    env.update(preset, PYTHONPATH=os.path.dirname(plumbing.__file__))
-    code = "import os, plumbing; print(os.environ['SDL_VIDEODRIVER'], os.environ['MUJOCO_GL'])"
+    env.update(preset, PYTHONPATH=os.path.dirname(common.__file__))
+    code = ("import os, common; common.headless_defaults(); "
+            "print(os.environ['SDL_VIDEODRIVER'], os.environ['MUJOCO_GL'])")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert p.returncode == 0, p.stderr
     assert tuple(p.stdout.split()) == expected
@@ -261,11 +268,11 @@ def test_headless_defaults_without_a_display_keep_user_choices(preset, expected)
 def test_env_errors_names_a_missing_egl_library():
     """Headless, MUJOCO_GL=egl (common's default there) on a machine without libEGL: importing
     MuJoCo fails inside PyOpenGL with this AttributeError (seen on a GPU server)."""
-    with pytest.raises(plumbing.UserError, match="Walker2d-v5: MuJoCo cannot render without the EGL"):
-        with plumbing.env_errors("Walker2d-v5"):
+    with pytest.raises(UserError, match="Walker2d-v5: MuJoCo cannot render without the EGL"):
+        with common.env_errors("Walker2d-v5"):
             raise AttributeError("'NoneType' object has no attribute 'eglQueryString'")
     with pytest.raises(AttributeError, match="no attribute 'step'"):  # any other: a bug, shown
-        with plumbing.env_errors("Walker2d-v5"):
+        with common.env_errors("Walker2d-v5"):
             raise AttributeError("'NoneType' object has no attribute 'step'")
 
 
@@ -285,10 +292,10 @@ def test_env_errors_knows_a_ctrl_c_from_a_missing_package():
                 raise gym.error.DependencyNotInstalled("MuJoCo is not installed") from e
 
     with pytest.raises(KeyboardInterrupt):
-        with plumbing.env_errors("Walker2d-v5"):
+        with common.env_errors("Walker2d-v5"):
             cut_short()
-    with pytest.raises(plumbing.UserError, match="needs a package that is not installed"):
-        with plumbing.env_errors("Walker2d-v5"):
+    with pytest.raises(UserError, match="needs a package that is not installed"):
+        with common.env_errors("Walker2d-v5"):
             raise gym.error.DependencyNotInstalled("MuJoCo is not installed")
 
 
@@ -314,11 +321,11 @@ def test_ctrl_c_during_save_checkpoint_waits_for_the_whole_file(tmp_path, monkey
         signal.raise_signal(signal.SIGINT)
         real_save(obj, f)
 
-    monkeypatch.setattr(plumbing.torch, "save", save)
+    monkeypatch.setattr(checkpoints.torch, "save", save)
     with pytest.raises(KeyboardInterrupt):  # it still arrives, once the file is whole
-        plumbing.save_checkpoint(dict(w=torch.arange(5.0)), tmp_path / "m.pt")
+        checkpoints.save_checkpoint(dict(w=torch.arange(5.0)), tmp_path / "m.pt")
     monkeypatch.undo()
-    assert torch.equal(plumbing.load_checkpoint(tmp_path / "m.pt")["w"], torch.arange(5.0))
+    assert torch.equal(checkpoints.load_checkpoint(tmp_path / "m.pt")["w"], torch.arange(5.0))
     assert [p.name for p in tmp_path.iterdir()] == ["m.pt"]
 
 
@@ -328,42 +335,43 @@ def test_save_checkpoint_that_cannot_write_is_a_user_error_and_leaves_no_tmp(tmp
     def full(fd):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(plumbing.os, "fsync", full)
-    with pytest.raises(plumbing.UserError, match="cannot write .*m.pt: No space left on device"):
-        plumbing.save_checkpoint(dict(w=torch.ones(2)), tmp_path / "m.pt")
+    monkeypatch.setattr(checkpoints.os, "fsync", full)
+    with pytest.raises(UserError, match="cannot write .*m.pt: No space left on device"):
+        checkpoints.save_checkpoint(dict(w=torch.ones(2)), tmp_path / "m.pt")
     assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.quick
 def test_load_checkpoint_refuses_another_scripts_model(tmp_path):
-    plumbing.save_checkpoint(dict(script="ppo_cartpole", w=torch.ones(1)), tmp_path / "a.pt")
-    plumbing.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "old.pt")
-    assert plumbing.load_checkpoint(tmp_path / "a.pt", ("w",), script="ppo_cartpole")["w"] == 1
-    with pytest.raises(plumbing.UserError, match="not a model of ppo_kl_cartpole.py: it is a model "
+    checkpoints.save_checkpoint(dict(script="ppo_cartpole", w=torch.ones(1)), tmp_path / "a.pt")
+    checkpoints.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "old.pt")
+    assert checkpoints.load_checkpoint(tmp_path / "a.pt", ("w",), script="ppo_cartpole")["w"] == 1
+    with pytest.raises(UserError, match="not a model of ppo_kl_cartpole.py: it is a model "
                                                "of ppo_cartpole.py"):
-        plumbing.load_checkpoint(tmp_path / "a.pt", ("w",), script="ppo_kl_cartpole")
-    with pytest.raises(plumbing.UserError, match="older version .* train it again"):
-        plumbing.load_checkpoint(tmp_path / "old.pt", ("w",), script="ppo_cartpole")
+        checkpoints.load_checkpoint(tmp_path / "a.pt", ("w",), script="ppo_kl_cartpole")
+    with pytest.raises(UserError, match="older version .* train it again"):
+        checkpoints.load_checkpoint(tmp_path / "old.pt", ("w",), script="ppo_cartpole")
 
 
 @pytest.mark.quick
 def test_stop_if_diverged(tmp_path):
     net, run = torch.nn.Linear(2, 1), tmp_path / "run"
     run.mkdir()
-    plumbing.stop_if_diverged(5, dict(loss=0.5, kl=torch.tensor(0.1)), [net], run, obs=[[1., 2.]])
+    runlog.stop_if_diverged(5, dict(loss=0.5, kl=torch.tensor(0.1)), [net], run)
     assert run.exists()  # all finite: nothing happens
-    with pytest.raises(plumbing.UserError, match=r"at step 7: nan or inf in loss_v; likely cause: "
+    with pytest.raises(UserError, match=r"at step 7: nan or inf in loss_v; likely cause: "
                                                r"too high a learning rate .*run was removed"):
-        plumbing.stop_if_diverged(7, dict(loss_pi=0.1, loss_v=float("inf")), [net], run)
+        runlog.stop_if_diverged(7, dict(loss_pi=0.1, loss_v=float("inf")), [net], run)
     assert not run.exists()
     with torch.no_grad():
         net.weight[0, 0] = 1e38  # finite weights, an output of inf
-    with pytest.raises(plumbing.UserError, match="nan or inf in Linear's weights or output"):
-        plumbing.stop_if_diverged(7, {}, [net], obs=[[10., 0.]])
+        out = net(torch.tensor([[10., 0.]]))
+    with pytest.raises(UserError, match="nan or inf in the networks' output"):
+        runlog.stop_if_diverged(7, {}, [net], outputs=[out])
     with torch.no_grad():
         net.bias[0] = float("nan")
-    with pytest.raises(plumbing.UserError, match="nan or inf in Linear's weights or output"):
-        plumbing.stop_if_diverged(7, {}, [net])
+    with pytest.raises(UserError, match="nan or inf in Linear's weights"):
+        runlog.stop_if_diverged(7, {}, [net])
 
 
 @dataclasses.dataclass
@@ -373,7 +381,7 @@ class Device:
     lr: float = 1e-3
 
     def __post_init__(self):
-        plumbing.check(self.lr > 0, f"--lr must be positive, got {self.lr}")
+        cli.check(self.lr > 0, f"--lr must be positive, got {self.lr}")
 
 
 @dataclasses.dataclass
@@ -384,28 +392,28 @@ class GpuFirst:
 
 @pytest.mark.quick
 def test_cuda_asked_for_without_a_gpu_says_so_in_one_line(monkeypatch, capsys):
-    monkeypatch.setattr(plumbing.torch.cuda, "is_available", lambda: False)
-    assert plumbing.parse_config(Device, ["--cuda"]).cuda
+    monkeypatch.setattr(cli.torch.cuda, "is_available", lambda: False)
+    assert cli.parse_config(Device, ["--cuda"]).cuda
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "torch sees no GPU" in err and "running on the CPU" in err
     with pytest.raises(SystemExit):  # bad input: its one error line, and no warning beside it
-        plumbing.parse_config(Device, ["--cuda", "--lr", "0"])
+        cli.parse_config(Device, ["--cuda", "--lr", "0"])
     assert capsys.readouterr().err.count("\n") == 1
-    plumbing.parse_config(Device, [])  # not asked for: nothing to say
-    plumbing.parse_config(GpuFirst, [])  # the GPU when there is one (DDPG's default): no warning
-    plumbing.parse_config(GpuFirst, ["--cuda"])
+    cli.parse_config(Device, [])  # not asked for: nothing to say
+    cli.parse_config(GpuFirst, [])  # the GPU when there is one (DDPG's default): no warning
+    cli.parse_config(GpuFirst, ["--cuda"])
     assert capsys.readouterr().err == ""
-    monkeypatch.setattr(plumbing.torch.cuda, "is_available", lambda: True)
-    plumbing.parse_config(Device, ["--cuda"])
+    monkeypatch.setattr(cli.torch.cuda, "is_available", lambda: True)
+    cli.parse_config(Device, ["--cuda"])
     assert capsys.readouterr().err == ""
 
 
 @pytest.mark.quick
 def test_load_weights_mismatch_is_a_user_error():
     small, big = torch.nn.Linear(3, 2), torch.nn.Linear(5, 2)
-    plumbing.load_weights(small, torch.nn.Linear(3, 2).state_dict(), "ok.pt")
-    with pytest.raises(plumbing.UserError, match="other.pt does not fit this script's Linear"):
-        plumbing.load_weights(small, big.state_dict(), "other.pt")
+    checkpoints.load_state(small, torch.nn.Linear(3, 2).state_dict(), "ok.pt")
+    with pytest.raises(UserError, match="other.pt does not fit this script's Linear"):
+        checkpoints.load_state(small, big.state_dict(), "other.pt")
 
 
 
@@ -414,7 +422,7 @@ def test_cartpole_maps_are_the_networks_at_grid_points():
     torch.manual_seed(0)
     policy, value = torch.nn.Linear(4, 2), torch.nn.Sequential(torch.nn.Linear(4, 1),
                                                                  torch.nn.Flatten(0))
-    maps = plumbing.cartpole_maps(policy, value, "cpu", n=5)
+    maps = report.cartpole_maps(policy, value, "cpu", n=5)
     for i, j in ((0, 0), (2, 3), (4, 1)):  # row: angular velocity, column: pole angle
         obs = torch.tensor([[0.0, 0.0, maps["angle"][j], maps["velocity"][i]]], dtype=torch.float32)
         with torch.no_grad():
@@ -432,11 +440,11 @@ def test_runs_latest_is_the_newest_run_of_this_script(tmp_path):
                  "td3_walker__Walker2d-v5__seed0__20260105-000000"):
         (tmp_path / name).mkdir()
     newest = tmp_path / "ddpg_walker__Hopper-v5__seed3__20260102-090000"
-    assert plumbing.latest_run(str(tmp_path / "latest"), "ddpg_walker") == str(newest)
-    assert plumbing.latest_run(str(tmp_path / "latest" / "best.pt"), "ddpg_walker") == str(
+    assert cli.latest_run(str(tmp_path / "latest"), "ddpg_walker") == str(newest)
+    assert cli.latest_run(str(tmp_path / "latest" / "best.pt"), "ddpg_walker") == str(
         newest / "best.pt")
-    with pytest.raises(plumbing.UserError, match="no run of ppo_cartpole.py"):
-        plumbing.latest_run(str(tmp_path / "latest"), "ppo_cartpole")
+    with pytest.raises(UserError, match="no run of ppo_cartpole.py"):
+        cli.latest_run(str(tmp_path / "latest"), "ppo_cartpole")
 
 
 def test_eval_runs_latest_from_the_command_line(tmp_path):

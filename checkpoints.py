@@ -1,0 +1,205 @@
+"""Saving and loading: model.pt and best.pt (weights and what rebuilds them), checkpoint.pt
+(each object's state_dict(), so --resume goes on exactly), and the Ctrl-C that stops a
+training loop at a whole step. Every file is written whole or not at all.
+"""
+
+import dataclasses
+import os
+import signal
+import threading
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from common import UserError, written_whole
+
+# Settings --resume may change: how long to go on, and what is shown or written. The rest
+# decide the run's numbers and come from its checkpoint.
+MAY_CHANGE_ON_RESUME = ("total_timesteps", "print_every", "gifs", "tensorboard", "curves",
+                        "watch", "resume", "run_dir")
+
+
+def save_checkpoint(obj, path):
+    """torch.save, flushed to disk, written whole."""
+    with written_whole(path) as tmp, open(tmp, "wb") as f:
+        torch.save(obj, f)
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def load_checkpoint(path, required=(), script=None):
+    """torch.load(weights_only=True), or one clear UserError; a run folder means its model.pt.
+    With `script` (e.g. "ppo_cartpole"), a checkpoint that names another script is refused."""
+    path = Path(path) / "model.pt" if Path(path).is_dir() else Path(path)
+    if not path.is_file():
+        here = Path(__file__).resolve().parent / path  # e.g. docs/ddpg_walker2d.pt, from elsewhere
+        where = "" if path.is_absolute() else f" (relative to {Path.cwd()}, where you are" + (
+            f"; did you mean {here}?)" if here.exists() else ")")
+        raise UserError(f"no checkpoint at {path}{where}")
+    try:  # weights_only: tensors and plain values, never arbitrary Python objects
+        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception:  # cut short, damaged, not a torch file, or Python objects inside
+        raise UserError(f"cannot read {path}: truncated, corrupt or not a checkpoint of these "
+                        "scripts") from None
+    if script and isinstance(ckpt, dict) and ckpt.get("script") != script:
+        raise UserError(f"{path} is not a model of {script}.py: it is " + (
+            f"a model of {ckpt['script']}.py" if "script" in ckpt else
+            "from an older version that did not record its script: train it again"))
+    if isinstance(ckpt, dict) and "buffer" in ckpt and not set(required) <= set(ckpt):
+        raise UserError(f"{path} is the run's checkpoint, for --resume {path.parent}; --eval "
+                        "plays model.pt or best.pt (or the run folder)")
+    if not isinstance(ckpt, dict) or not set(required) <= set(ckpt):
+        raise UserError(f"{path} is not a checkpoint of this script (it lacks {set(required)})")
+    return ckpt
+
+
+def load_state(obj, state, path):
+    """obj.load_state_dict(state), with a UserError naming `path` if it does not fit."""
+    try:
+        obj.load_state_dict(state)
+    except (RuntimeError, ValueError, KeyError) as e:  # shapes, keys or optimizer groups differ
+        raise UserError(f"{path} does not fit this script's {type(obj).__name__}: "
+                        f"{str(e).splitlines()[0]}") from None
+
+
+def save_model(path, script, cfg, step, nets, **info):
+    """model.pt (or best.pt): the networks' weights, the settings, and what rebuilds them
+    (`info`, e.g. obs_dim and n_actions)."""
+    save_checkpoint(dict(script=script, **{name: net.state_dict() for name, net in nets.items()},
+                         config=asdict(cfg), **info, global_step=step), path)
+
+
+def load_model(path, script, key, build):
+    """--eval: the network saved under `key` at `path` (model.pt, best.pt or a run folder),
+    made by `build(checkpoint)` (the script's constructor call) with its weights. Returns the
+    network and the saved run's env id."""
+    ckpt = load_checkpoint(path, script=script, required=(key, "obs_dim", "config"))
+    net = build(ckpt)
+    load_state(net, ckpt[key], path)
+    return net, ckpt["config"]["env_id"]
+
+
+def config_to_resume(cfg, script):
+    """The Config of the run cfg.resume, as saved, with the flags of MAY_CHANGE_ON_RESUME that
+    this command set. A learning setting set to something else than the saved run's is refused."""
+    path = Path(cfg.resume) / "checkpoint.pt"
+    saved = load_checkpoint(path, required=("config", "global_step"), script=script)
+    defaults = {f.name: f.default for f in dataclasses.fields(cfg)}
+    kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}
+    for name, value in asdict(cfg).items():
+        if name in MAY_CHANGE_ON_RESUME or value in (defaults[name], kept[name]):
+            continue
+        raise UserError(f"--resume continues the run with its saved settings: --"
+                        f"{name.replace('_', '-')} {value} differs from the saved {kept[name]}")
+    changed = {name: getattr(cfg, name) for name in MAY_CHANGE_ON_RESUME
+               if getattr(cfg, name) != defaults[name]}
+    cfg = type(cfg)(**{**kept, **changed})
+    if cfg.total_timesteps <= saved["global_step"]:
+        raise UserError(f"{cfg.resume} already ran {saved['global_step']} steps; pass a "
+                        f"larger --total-timesteps to go on")
+    return cfg
+
+
+def save(path, script, cfg, step, obs, holders):
+    """checkpoint.pt: the settings, the step, the loop's obs and each holder's state_dict()
+    (networks, optimizers, buffer, env, random generators, logs)."""
+    started = time.time()
+    save_checkpoint(dict(script=script, config=asdict(cfg), global_step=step,
+                         obs=torch.as_tensor(obs),
+                         **{key: obj.state_dict() for key, obj in holders.items()}), path)
+    print(f"checkpoint at step {step}: {path} ({path.stat().st_size / 2**20:.0f} MB, "
+          f"written in {time.time() - started:.1f} s)", flush=True)
+
+
+def resume(run_dir, script, cfg, holders):
+    """Put back into each holder what save() saved in run_dir/checkpoint.pt; return the loop's
+    (global_step, obs)."""
+    path = Path(run_dir) / "checkpoint.pt"
+    ckpt = load_checkpoint(path, required=(*holders, "obs"), script=script)
+    for key, obj in holders.items():
+        load_state(obj, ckpt[key], path)
+    print(f"resumed {run_dir} at step {ckpt['global_step']} of {cfg.total_timesteps}", flush=True)
+    return ckpt["global_step"], ckpt["obs"].numpy()
+
+
+class RandomState:
+    """The random generators a run draws from (torch's, the warm-up's action space), as a
+    state_dict() for checkpoint.pt."""
+
+    def __init__(self, env, device):
+        self.env, self.cuda = env, torch.device(device).type == "cuda"
+
+    def state_dict(self):
+        return dict(torch=torch.get_rng_state(), action_space=self.action_space.state,
+                    cuda=torch.cuda.get_rng_state() if self.cuda else None)
+
+    def load_state_dict(self, state):
+        torch.set_rng_state(state["torch"])
+        if self.cuda and state["cuda"] is not None:
+            torch.cuda.set_rng_state(state["cuda"])
+        self.action_space.state = state["action_space"]
+
+    @property
+    def action_space(self):
+        return self.env.action_space.np_random.bit_generator
+
+
+class MujocoEnvState:
+    """A MuJoCo env mid-episode as a state_dict(): the simulator's whole state (positions,
+    velocities, the solver's warm start), the generator used at reset, and the wrappers'
+    counters (the time limit's steps, the episode's return and length so far)."""
+
+    COUNTERS = ("_elapsed_steps", "episode_returns", "episode_lengths")
+
+    def __init__(self, env):
+        self.env = env
+
+    def state_dict(self):
+        import mujoco
+
+        sim, what = self.env.unwrapped, mujoco.mjtState.mjSTATE_INTEGRATION
+        state = np.empty(mujoco.mj_stateSize(sim.model, what))
+        mujoco.mj_getState(sim.model, sim.data, state, what)
+        return dict(mujoco=torch.from_numpy(state), rng=sim.np_random.bit_generator.state,
+                    **{name: float(self.env.get_wrapper_attr(name)) if name == "episode_returns"
+                       else int(self.env.get_wrapper_attr(name)) for name in self.COUNTERS})
+
+    def load_state_dict(self, saved):
+        import mujoco
+
+        sim = self.env.unwrapped
+        mujoco.mj_setState(sim.model, sim.data, saved["mujoco"].numpy(),
+                           mujoco.mjtState.mjSTATE_INTEGRATION)
+        sim.np_random.bit_generator.state = saved["rng"]
+        for name in self.COUNTERS:
+            self.env.set_wrapper_attr(name, saved[name])
+
+
+class CtrlC:
+    """Around a training loop: a first Ctrl-C only sets `pressed`, so the loop can finish its
+    step and stop where nothing is half done; a second one ends the block at once."""
+
+    def __init__(self):
+        self.pressed = False
+        self.active = (threading.current_thread() is threading.main_thread()
+                       and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+    def __enter__(self):
+        if self.active:
+            signal.signal(signal.SIGINT, self.handler)
+        return self
+
+    def handler(self, signum, frame):
+        if self.pressed:
+            raise KeyboardInterrupt
+        self.pressed = True
+
+    def __exit__(self, kind, error, traceback):
+        if self.active:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        if kind is KeyboardInterrupt:
+            self.pressed = True
+            return True  # the second Ctrl-C: the block ends, the run reports where it stopped

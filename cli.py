@@ -1,0 +1,247 @@
+"""The command line: the flags every script shares, a script's Config read from flags, and
+one-line errors with their exit codes (2: bad input, 130: Ctrl-C). A reader may skip it.
+
+A Config is a @dataclass; each field is a flag (`num_envs: int = 8` -> `--num-envs 8`), its
+help the string under it, bool -> `--x/--no-x`, `float | None` also takes `none`.
+"""
+
+import argparse
+import ast
+import contextlib
+import dataclasses
+import inspect
+import signal
+import sys
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+import plots
+from common import UserError, from_ctrl_c, headless
+
+
+@dataclass
+class OutputFlags:
+    """What a run writes and shows, and playback: the flags every script shares."""
+
+    run_dir: str = "runs"
+    """parent folder of the run folder <script>__<env>__seed<k>__<time>/ (runs/latest: the
+    newest one, for --eval and --resume)"""
+    print_every: int = 10
+    """print a progress line every this many updates"""
+    gifs: bool = True
+    """write before.gif (untrained) and after.gif (trained) to the run folder, one episode each
+    (CartPole scripts: actions drawn from pi, as in training and in tutorial 004's GIFs)"""
+    curves: bool = True
+    """draw curve.png (the learning curve) and inside.png (what the updates do inside the
+    algorithm; docs/inside.md) in the run folder"""
+    tensorboard: bool = False
+    """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
+    names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
+    eval_episodes: int = 10
+    """episodes of each evaluation (DDPG: each one; CartPole: the checks and the last; --eval)"""
+    eval_seed: int = 10_000
+    """seed of the evaluation env (and its action draws), kept apart from the training seed"""
+    watch: bool = False
+    """after training (or with --eval), play the policy in a window; needs a display"""
+    eval: str | None = None
+    """a saved model (model.pt, best.pt) or its run folder: skip training and play it"""
+    gif: str | None = None
+    """with --eval: write one episode of the saved policy to this GIF file instead (no
+    display needed)"""
+    threads: int = 1
+    """torch CPU threads (1 .. cores); the same seed gives the same logs only with the same
+    count (threads change float sums)"""
+    cuda: bool = False
+    """train on the GPU if there is one (its gain is unmeasured; other numbers per seed)"""
+
+    def __post_init__(self):
+        check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
+        check_ranges(self, print_every="> 0", eval_episodes="> 0", threads="> 0")
+        check(not self.gif or self.eval, "--gif writes a GIF of a saved policy: it needs --eval")
+        check(not self.gif or self.gif.lower().endswith(".gif"),
+              f"--gif writes a GIF: give a file name that ends in .gif, got {self.gif}")
+
+
+@dataclass
+class SolvedFlags(OutputFlags):
+    """The CartPole scripts' flags: the shared ones and the solved rule's."""
+
+    stop_when_solved: bool = True
+    """stop once the mean return of the last solved_window finished episodes reaches the
+    solved return and pi as it is then does too, over eval_episodes episodes with actions drawn
+    from pi (env seed eval_seed + 1); checked at most once per update"""
+    solved_return: float | None = None
+    """the return that counts as solved; none = the env's reward_threshold (CartPole-v1: 475)"""
+    solved_window: int = 20
+    """how many of the last finished episodes the solved rule averages (and the progress
+    line's return shows)"""
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_ranges(self, solved_window="> 0")
+
+
+@dataclass
+class CheckpointFlags(OutputFlags):
+    """DDPG's and TD3's flags: the shared ones, their progress lines and their checkpoints."""
+
+    print_every: int = 1000
+    """print a progress line every this many env steps"""
+    gifs: bool = True
+    """write before.gif (untrained actor), after.gif (trained actor) and best.gif (the best
+    evaluation so far, refreshed as it improves) to the run folder"""
+    curves: bool = True
+    """write curve.png (evaluation returns against env steps) and inside.png (the critic's
+    Q against the return it estimates) at every evaluation"""
+    checkpoint_every: int = 25_000
+    """write checkpoint.pt (networks, optimizers, replay buffer, random generators, logs) every
+    this many env steps and on Ctrl-C; --resume continues from it"""
+    resume: str | None = None
+    """a run folder: continue that run exactly where its checkpoint.pt left it, in the same
+    folder and with its saved settings (--total-timesteps may extend it)"""
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_ranges(self, checkpoint_every="> 0")
+        check(not (self.eval and self.resume),
+              "--eval plays a saved actor and --resume continues training: pass one")
+
+
+def parse_config(cls, argv=None, description=None):
+    """The @dataclass `cls` from flags. The script's own fields come first in --help, the
+    shared ones after. Bad input: one line, exit 2 (abbreviations are refused)."""
+    parser = argparse.ArgumentParser(description=description, allow_abbrev=False,
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage
+    docs = {}
+    for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
+        docs.update(_field_docs(klass))
+    own = vars(cls).get("__annotations__", {})
+    for f in sorted(dataclasses.fields(cls), key=lambda f: f.name not in own):
+        name = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
+        kind = name.replace(" | None", "")  # "float | None" -> "float"
+        convert = {"int": int, "float": float, "str": str, "bool": bool}[kind]
+        how = dict(type=_or_none(convert) if "None" in name else convert, metavar=kind.upper())
+        if kind == "bool":
+            how = dict(action=argparse.BooleanOptionalAction)
+        flag = "--" + f.name.replace("_", "-")
+        text = docs.get(f.name, "") + (f"; none on the command line: {flag} none"
+                                       if "None" in name else "")
+        parser.add_argument(flag, default=f.default, **how, help=text.replace("%", "%%"))
+    args = parser.parse_args(argv)
+    for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
+        if isinstance(value, float) and not np.isfinite(value):
+            parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")
+    if getattr(args, "watch", False) and headless():  # fail now, not after hours of training
+        parser.error("--watch opens a window, but this machine has no display (see the GIFs, "
+                     "or write one of a saved model: --eval RUN --gif OUT.gif)")
+    script = Path(inspect.getfile(cls)).stem  # the script whose Config this is
+    try:
+        for name in ("eval", "resume"):  # runs/latest: this script's newest run folder there
+            if getattr(args, name, None):
+                setattr(args, name, latest_run(getattr(args, name), script))
+        cfg = cls(**vars(args))
+    except (ValueError, UserError) as e:
+        parser.error(str(e))
+    if getattr(cfg, "cuda", False) and not cls.cuda and not torch.cuda.is_available():
+        print("warning: --cuda, but torch sees no GPU here (a CPU-only torch, or no driver): "
+              "running on the CPU", file=sys.stderr, flush=True)  # as the scripts then do
+    return cfg
+
+
+def latest_run(path, script):
+    """`path` with a part named `latest` (runs/latest, runs/latest/best.pt) read as the newest
+    run folder of `script` in that folder, by the time in its name; a path that exists as it
+    is stays as it is.
+
+    >>> latest_run("runs/ppo_cartpole__CartPole-v1__seed0__20260101-120000", "ppo_cartpole")
+    'runs/ppo_cartpole__CartPole-v1__seed0__20260101-120000'
+    """
+    parts = Path(path).parts
+    if "latest" not in parts or Path(path).exists():
+        return path
+    at = parts.index("latest")
+    parent = Path(*parts[:at]) if at else Path(".")
+    runs = sorted(parent.glob(f"{script}__*"), key=lambda run: run.name.split("__")[-1])
+    if not runs:
+        raise UserError(f"{path}: no run of {script}.py in {parent} yet")
+    return str(Path(runs[-1], *parts[at + 1:]))
+
+
+def _field_docs(klass):
+    """{field: the string under it} of one dataclass, read from its source."""
+    if "__dataclass_fields__" not in vars(klass):
+        return {}
+    body = ast.parse(textwrap.dedent(inspect.getsource(klass))).body[0].body
+    return {node.target.id: " ".join(str(nxt.value.value).split())
+            for node, nxt in zip(body, body[1:]) if isinstance(node, ast.AnnAssign)
+            and isinstance(nxt, ast.Expr) and isinstance(nxt.value, ast.Constant)}
+
+
+def _or_none(convert):
+    """A flag's type that also takes "none"; argparse names it in errors."""
+    def parse(text):
+        return None if text.lower() == "none" else convert(text)
+    parse.__name__ = convert.__name__
+    return parse
+
+
+def check(condition, message):
+    """For Config.__post_init__: raise ValueError(message) unless `condition`."""
+    if not condition:
+        raise ValueError(message)
+
+
+RANGES = {"> 0": (lambda v: v > 0, "positive"), ">= 0": (lambda v: v >= 0, ">= 0"),
+          "> 1": (lambda v: v > 1, "> 1"), "(0, 1]": (lambda v: 0 < v <= 1, "in (0, 1]"),
+          "[0, 1]": (lambda v: 0 <= v <= 1, "in [0, 1]")}
+
+
+def check_ranges(config, **ranges):
+    """For Config.__post_init__: each named field lies in its range (a key of RANGES; "... or
+    none" also lets None through), else ValueError. Checks relating two fields stay explicit."""
+    for name, allowed in ranges.items():
+        value, optional = getattr(config, name), allowed.endswith(" or none")
+        inside, words = RANGES[allowed.removesuffix(" or none")]
+        if not (value is None and optional or value is not None and inside(value)):
+            raise ValueError(f"--{name.replace('_', '-')} must be {words}"
+                             f"{' or none' if optional else ''}, got {value}")
+
+
+def check_mujoco(env_id):
+    """A gymnasium env that is not a MuJoCo one is refused (from its registration; no env is
+    made). Other ids: train() says what is wrong with them."""
+    try:
+        entry = gym.spec(env_id).entry_point
+    except gym.error.Error:
+        return  # unknown: train() says so, with gymnasium's suggestion
+    if isinstance(entry, str) and entry.startswith("gymnasium.envs."):
+        check(entry.startswith("gymnasium.envs.mujoco"),
+              f"{env_id} is not a MuJoCo env; this script trains MuJoCo tasks (Walker2d-v5, "
+              "Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5, ...)")
+
+
+@contextlib.contextmanager
+def clear_exit():
+    """Around main(): bad input, one `error:` line and exit 2; Ctrl-C, even turned into another
+    error, one line and exit 130."""
+    try:
+        yield
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr, flush=True)
+        sys.exit(2)
+    except (KeyboardInterrupt, ImportError, RuntimeError, MemoryError, gym.error.Error) as e:
+        if from_ctrl_c(e):
+            print("\ninterrupted (Ctrl-C)", file=sys.stderr, flush=True)
+            sys.exit(130)
+        if isinstance(e, MemoryError) or "allocate" in str(e):  # e.g. --buffer-size too large
+            print(f"error: not enough memory for these settings (too many envs or steps, or too "
+                  f"large a buffer?): {str(e).splitlines()[0] if str(e) else 'MemoryError'}",
+                  file=sys.stderr, flush=True)
+            sys.exit(2)
+        raise

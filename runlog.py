@@ -1,0 +1,279 @@
+"""The run folder and its logs: CSV rows written as they come, progress lines, the finished
+episodes, and the check that stops a diverged run. It decides nothing: the scripts' loops do.
+"""
+
+import contextlib
+import csv
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+import checkpoints
+from common import UserError
+
+
+def make_run_dir(root, script, env_id, seed):
+    """Create and return <root>/<script>__<env>__seed<k>__<timestamp>[-i]/."""
+    name = f"{script}__{env_id.replace('/', '-')}__seed{seed}__"
+    base = Path(root) / (name + time.strftime("%Y%m%d-%H%M%S"))
+    for path in [base, *(Path(f"{base}-{i}") for i in range(1, 1000))]:
+        try:
+            path.mkdir(parents=True)
+            return path
+        except FileExistsError:  # another run started this second: the next name
+            continue
+        except OSError as e:
+            raise UserError(f"cannot create run folder {path}: {e.strerror}") from None
+
+
+def append_csv(path, row):
+    """Append a dict as a CSV row (header first); one open per row: complete after Ctrl-C."""
+    new = not Path(path).exists()
+    with open(path, "a", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(row))
+        if new:
+            writer.writeheader()
+        writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
+
+
+def stop_if_diverged(step, losses, nets, run_dir=None, outputs=()):
+    """nan or inf in `losses` (name -> number), in the weights of `nets` or in `outputs` (the
+    networks' outputs on the next states): remove `run_dir`, raise one UserError naming the
+    step and the likely cause."""
+    bad = [name for name, value in losses.items()
+           if np.ndim(value) == 0 and not np.isfinite(float(value))]  # arrays: kept for pictures
+    bad += [f"{type(net).__name__}'s weights" for net in nets
+            if not all(bool(p.isfinite().all()) for p in net.parameters())]
+    bad += ["the networks' output"] * (not all(bool(out.isfinite().all()) for out in outputs))
+    if bad:
+        if run_dir is not None:
+            shutil.rmtree(run_dir, ignore_errors=True)
+        raise UserError(f"training diverged at step {step}: nan or inf in {', '.join(bad)}; "
+                        "likely cause: too high a learning rate (try a smaller one)"
+                        + (f"; {run_dir} was removed" if run_dir is not None else ""))
+
+
+def hours_minutes(seconds):
+    """5000 -> 'about 1 h 23 min', 90 -> 'about 2 min', 20 -> 'under a minute'."""
+    minutes = round(seconds / 60)
+    if minutes < 1:
+        return "under a minute"
+    return (f"about {minutes // 60} h {minutes % 60:02d} min" if minutes >= 60
+            else f"about {minutes} min")
+
+
+def clock(seconds):
+    """1234.5 -> '20:34', 5000 -> '1:23:20'."""
+    return time.strftime("%H:%M:%S", time.gmtime(seconds)).lstrip("0").lstrip(":") or "0"
+
+
+class UpdateLog:
+    """A CartPole script's run folder: a progress.csv row per update, with a progress line
+    every print_every updates showing the numbers of `shown` ({column: format}); the finished
+    episodes (episodes.csv at the end) and the mean return of the last solved_window of them;
+    what inside.png draws (the updates' arrays, the states visited)."""
+
+    def __init__(self, script, cfg, shown):
+        self.script, self.cfg, self.shown = script, cfg, shown
+        self.start_time = time.time()
+        self.dir = make_run_dir(cfg.run_dir, script, cfg.env_id, cfg.seed)
+        print(f"run folder: {self.dir}", flush=True)
+        self.episodes = []  # (env step, return) of every finished training episode, in order
+        self.kept, self.visited = [], []  # each update's arrays; the last batches' obs
+        self.global_step, self.updates, self.stats = 0, 0, {}
+        self.solved_step, self.interrupted = None, False
+
+    def recent_return(self):
+        """The mean return of the last solved_window finished training episodes."""
+        recent = [r for _, r in self.episodes[-self.cfg.solved_window:]]
+        return float(np.mean(recent)) if recent else np.nan
+
+    def episodes_ended(self, info, step):
+        """Record the episodes that ended at env step `step` (from the vector env's `info`);
+        return their returns."""
+        self.global_step = step
+        if "episode" not in info:
+            return []
+        ended = [float(r) for r in info["episode"]["r"][info["_episode"]]]  # _episode: which envs
+        self.episodes += [(step, r) for r in ended]
+        return ended
+
+    def solved(self, threshold):
+        """Has the mean return of the last solved_window episodes reached `threshold`? Says so
+        the first time."""
+        if len(self.episodes) < self.cfg.solved_window or self.recent_return() < threshold:
+            return False
+        if self.solved_step is None:
+            self.solved_step = self.global_step
+            print(f"solved: mean return of the last {self.cfg.solved_window} episodes "
+                  f"{self.recent_return():.1f} >= {threshold:g} at step {self.global_step} "
+                  f"(episode {len(self.episodes)}) after {time.time() - self.start_time:.1f}s",
+                  flush=True)
+        return True
+
+    def update(self, stats, visited=None, **columns):
+        """After an update: its progress.csv row (the step, episodes, recent return, `columns`,
+        then the numbers of `stats`; its arrays are kept for inside.png), and every print_every
+        updates (and after the first) a progress line. `visited`: the batch's observations,
+        the last 10 batches' are marked on inside.png's maps."""
+        self.updates += 1
+        if visited is not None:
+            self.visited = [*self.visited[-9:], visited.detach().cpu().numpy()]
+        arrays = {k: v.detach().cpu().numpy() for k, v in stats.items() if torch.is_tensor(v)}
+        self.stats = {k: v for k, v in stats.items() if k not in arrays}
+        self.kept.append((self.global_step, arrays))
+        self.row(**columns, **self.stats)
+        if self.updates % self.cfg.print_every == 0 or self.updates == 1:
+            elapsed, shown = time.time() - self.start_time, {**columns, **self.stats}
+            numbers = "  ".join(f"{key.replace('_', ' ') if key == 'running_reward' else key} "
+                                f"{shown[key]:{form}}" for key, form in self.shown.items()
+                                if key in shown)
+            print(f"step {self.global_step:>7}  {self.global_step / elapsed:6.0f} steps/s  "
+                  f"return({self.cfg.solved_window}) {self.recent_return():6.1f}  {numbers}  "
+                  f"{elapsed:.1f}s", flush=True)
+
+    def row(self, **columns):
+        """A progress.csv row: the step, the episodes so far, their recent mean, `columns`."""
+        append_csv(self.dir / "progress.csv", dict(
+            global_step=self.global_step, episodes=len(self.episodes),
+            return_mean20=self.recent_return(), **columns))
+
+    def stopped_row(self, **columns):
+        """progress.csv's last row, where training stopped inside a rollout: no update, so its
+        update numbers are nan."""
+        self.row(**columns, **dict.fromkeys(self.stats, float("nan")))
+
+    @contextlib.contextmanager
+    def saving_model(self, nets, **info):
+        """Around the training loop: Ctrl-C ends it (`interrupted`), a nan that stopped a
+        distribution ends it with one line (stop_if_diverged); either way, as it ends,
+        episodes.csv and model.pt (`nets`' weights, `info`) are written as training left them."""
+        try:
+            yield self
+        except KeyboardInterrupt:
+            self.interrupted = True
+        except (ValueError, RuntimeError):  # e.g. Categorical refusing nan logits: diverged?
+            stop_if_diverged(self.global_step, {}, nets.values(), self.dir)  # if so
+            raise
+        finally:
+            if self.dir.exists():  # stop_if_diverged removes a diverged run's folder
+                for step, ep_return in self.episodes:
+                    append_csv(self.dir / "episodes.csv", episode_row(step, ep_return))
+                checkpoints.save_model(self.dir / "model.pt", self.script, self.cfg,
+                                       self.global_step, nets, **info)
+
+
+class EvaluationLog:
+    """DDPG's run folder: episodes.csv as episodes end, evaluations.csv, progress lines with
+    steps/s of learning and the time left. With cfg.resume, the folder of that run; its
+    state_dict() goes into checkpoint.pt, load_state_dict() rewinds the logs to it."""
+
+    def __init__(self, script, cfg, device):
+        self.script, self.cfg = script, cfg
+        self.episodes, self.evaluations = [], []  # (step, return); (step, mean, std)
+        self.inside = []  # per evaluation: (mean Q(s, mu(s)), mean discounted return, states)
+        now = time.time()
+        self.timer = dict(start=now, step=0, time=now, rate=float("nan"))
+        if cfg.resume:
+            self.dir = Path(cfg.resume)
+            return
+        self.dir = make_run_dir(cfg.run_dir, script, cfg.env_id, cfg.seed)
+        print(f"run folder: {self.dir}  (device: {device})", flush=True)
+        first = max(cfg.eval_every * (cfg.start_steps // cfg.eval_every + 1), cfg.eval_every)
+        warm_up = (f"once in the warm-up (step {cfg.eval_every}), then "
+                   if cfg.eval_every <= cfg.start_steps else "")
+        print(f"curve.png there is redrawn at every evaluation: {warm_up}from step {first} "
+              f"on, every {cfg.eval_every} steps", flush=True)
+        shipped = Path(__file__).resolve().parent / "docs" / f"{script}2d.pt"
+        if cfg.env_id == "Walker2d-v5" and shipped.exists():
+            print(f"meanwhile, a trained walker (a 1M-step run's best actor): python "
+                  f"{script}.py --eval {shipped} --gif walker.gif (or --watch)", flush=True)
+
+    def episode_ended(self, step, episode_return):
+        self.episodes.append((step, float(episode_return)))
+        append_csv(self.dir / "episodes.csv", episode_row(*self.episodes[-1]))
+
+    def progress(self, step, losses, nets):
+        """Every print_every steps a progress line, after a check that the losses and `nets`
+        are finite (nan or inf: one line, and a run without a checkpoint is removed)."""
+        if step > self.cfg.start_steps:  # steps/s of learning: from this process's first update
+            self.timer.setdefault("learning_since", (step, time.time()))
+        if step % self.cfg.print_every:
+            return
+        if losses is not None:
+            checkpointed = (self.dir / "checkpoint.pt").exists()
+            stop_if_diverged(step, dict(critic_loss=losses[0], actor_loss=losses[1]), nets,
+                             None if checkpointed else self.dir)
+        now, cfg, timer = time.time(), self.cfg, self.timer
+        # steps/s of learning since the last line (or since learning began, if it was later)
+        since_step, since = max((timer["step"], timer["time"]),
+                                timer.get("learning_since", (step, 0)))
+        if step > cfg.start_steps and step > since_step:
+            timer["rate"] = (step - since_step) / (now - since)
+            left = (cfg.total_timesteps - step) / timer["rate"]
+            speed = f"{timer['rate']:5.0f} steps/s  {hours_minutes(left)} to go"
+        else:
+            speed = "learning starts" if step > cfg.start_steps else "warm-up (random actions)"
+        recent = (f"{np.mean([r for _, r in self.episodes[-10:]]):8.1f}" if self.episodes
+                  else "     n/a")
+        loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
+                     if losses is not None else "")
+        print(f"step {step:>8}  {speed}  return(10) {recent}{loss_text}  "
+              f"{clock(now - timer['start'])}", flush=True)
+        self.clock_from(step)
+
+    def clock_from(self, step):
+        """The next progress line's steps/s counts from here (not an evaluation or a write)."""
+        self.timer.update(step=step, time=time.time())
+
+    def evaluation(self, step, returns, inside):
+        """An evaluation's row in evaluations.csv, with the critic's Q(s, mu(s)) against the
+        discounted return (`inside`: common.q_against_return's three numbers). Returns whether
+        it is the best so far."""
+        mean, std = float(np.mean(returns)), float(np.std(returns))
+        best = mean > max((m for _, m, _ in self.evaluations), default=-float("inf"))
+        self.evaluations.append((step, mean, std))
+        self.inside.append(inside)
+        append_csv(self.dir / "evaluations.csv", evaluation_row(self.evaluations[-1],
+                                                                self.episodes, inside))
+        print(f"evaluation at step {step}: {mean:.1f} +- {std:.1f} over {len(returns)} "
+              f"episodes", flush=True)
+        return best
+
+    def state_dict(self):
+        return dict(episodes=self.episodes, evaluations=self.evaluations, inside=self.inside,
+                    elapsed=time.time() - self.timer["start"])
+
+    def load_state_dict(self, state):
+        """The logs as they were at the checkpoint: rows a killed run wrote after it go (the
+        resumed run writes them again, identically); the run's clock goes on from there."""
+        self.episodes[:], self.evaluations[:] = state["episodes"], state["evaluations"]
+        self.inside[:] = state["inside"]
+        self.timer["start"] -= state["elapsed"]
+        for stale in self.dir.glob("*.tmp*"):  # a write that a kill cut short
+            stale.unlink()
+        for name, rows in (("episodes.csv", [episode_row(*e) for e in self.episodes]),
+                           ("evaluations.csv", [evaluation_row(e, self.episodes, q)
+                                                for e, q in zip(self.evaluations, self.inside)])):
+            (self.dir / name).unlink(missing_ok=True)
+            for row in rows:
+                append_csv(self.dir / name, row)
+
+
+def episode_row(step, ep_return):
+    """An episodes.csv row, as every script writes it."""
+    return {"global_step": step, "return": ep_return}
+
+
+def evaluation_row(evaluation, episodes, inside):
+    """An evaluations.csv row: the evaluation, the training return before it, and the critic's
+    estimate against the return (`inside`: common.q_against_return's three numbers)."""
+    step, mean, std = evaluation
+    done = [ret for s, ret in episodes if s <= step]
+    q, g, n = inside
+    return dict(global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
+                train_return_mean10=float(np.mean(done[-10:])) if done else float("nan"),
+                q_estimate=q, discounted_return=g, q_states=n)
