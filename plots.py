@@ -2,8 +2,8 @@
 
 The scripts call draw_run(run_dir) after training (DDPG: after every evaluation) to
 write run_dir/curve.png. From the command line, compare runs: one panel per env, titled
-with it and labelled with what it plots (CartPole scripts: the mean return of the last
-20 training episodes; DDPG: the evaluation return); in it, one colour per script, each
+with it and labelled with what it plots (CartPole scripts: the mean return of the recent
+training episodes, the solved rule's window; DDPG: the evaluation return); in it, one colour per script, each
 run a thin line that ends where the run stopped, and the mean of a script's runs (thick)
 over the steps where all of them ran.
 
@@ -52,7 +52,7 @@ def pyplot():
     return plt
 
 
-def draw_run(run_dir, solved_return=None, solved_step=None):
+def draw_run(run_dir, solved_return=None, solved_step=None, window=20):
     """Write run_dir/curve.png from the run's CSV logs; returns its path."""
     run_dir = Path(run_dir)
     plt = pyplot()
@@ -61,7 +61,7 @@ def draw_run(run_dir, solved_return=None, solved_step=None):
     else:
         episodes = run_dir / "episodes.csv"  # absent when no episode has finished yet
         fig = draw_cartpole(plt, read_csv(episodes) if episodes.exists() else {},
-                            read_csv(run_dir / "progress.csv"), solved_return, solved_step)
+                            read_csv(run_dir / "progress.csv"), solved_return, solved_step, window)
     fig.axes[0].set_title(run_dir.name, fontsize=8)
     fig.tight_layout()
     return save_whole(plt, fig, run_dir / "curve.png", dpi=90)
@@ -80,14 +80,14 @@ def save_whole(plt, fig, path, dpi):
     return path
 
 
-def draw_cartpole(plt, episodes, progress, solved_return, solved_step):
-    """Episode returns (faint) and their mean over 20 episodes; below, the update's diagnostics."""
+def draw_cartpole(plt, episodes, progress, solved_return, solved_step, window):
+    """Episode returns (faint), their mean over `window` episodes; below, the diagnostics."""
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True,
                                   gridspec_kw=dict(height_ratios=[3, 1.4]))
     steps, returns = episodes.get("global_step", []), episodes.get("return", [])
     ax.plot(steps, returns, color="C0", alpha=0.3, lw=0.8, label="episode return")
-    ax.plot(steps, running_mean(np.asarray(returns), 20), color="C0", lw=2,
-            label="mean of the last 20 episodes")
+    ax.plot(steps, running_mean(np.asarray(returns), window), color="C0", lw=2,
+            label=f"mean of the last {window} episodes")
     if solved_return is not None:
         ax.axhline(solved_return, color="gray", ls="--", lw=1, label=f"solved: {solved_return:g}")
     if solved_step is not None:
@@ -293,7 +293,7 @@ def overestimation(ax, evaluations):
 
 
 # CSV column -> TensorBoard tag (CleanRL's names where CleanRL logs the same thing).
-TAGS = {"return": "charts/episodic_return", "return_mean20": "charts/return_mean20",
+TAGS = {"return": "charts/episodic_return", "recent_return": "charts/recent_return",
         "lr": "charts/learning_rate", "sps": "charts/SPS", "loss_pi": "losses/policy_loss",
         "loss_v": "losses/value_loss", "entropy": "losses/entropy", "approx_kl": "losses/approx_kl",
         "clipfrac": "losses/clipfrac", "kl": "losses/kl", "beta": "charts/beta",
@@ -332,17 +332,18 @@ def to_tensorboard(run_dir, sps=None):
 
 
 EVAL_RETURN = "evaluation return (mean of its episodes, no exploration noise)"
-MEAN20 = "mean return of the last 20 training episodes"
+RECENT = "mean return of the recent training episodes (the solved rule's window)"
 
 
 def curve_of(run_dir):
     """(steps, values, what the values are) of one run, points without a value dropped:
     DDPG's evaluation means (evaluations.csv), or the CartPole scripts' mean return of the
-    last 20 finished training episodes after each update (progress.csv)."""
+    last solved_window (default 20) training episodes after each update (progress.csv)."""
     if (run_dir / "evaluations.csv").exists():
         table, column, what = read_csv(run_dir / "evaluations.csv"), "eval_mean", EVAL_RETURN
     else:
-        table, column, what = read_csv(run_dir / "progress.csv"), "return_mean20", MEAN20
+        table, what = read_csv(run_dir / "progress.csv"), RECENT
+        column = "recent_return" if "recent_return" in table else "return_mean20"  # older runs
     steps, values = table.get("global_step", np.array([])), table.get(column, np.array([]))
     ok = np.isfinite(values)  # nan before the first finished episode
     return steps[ok], values[ok], what

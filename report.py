@@ -143,7 +143,7 @@ def finish_cartpole(run, threshold, nets, device, reward_scale):
     if run.interrupted:  # the curve so far and where everything is; main() exits with 130
         if cfg.curves and (run_dir / "progress.csv").exists():
             with common.ctrl_c_deferred():  # a second Ctrl-C waits for the picture
-                plots.draw_run(run_dir, threshold, run.solved_step)
+                plots.draw_run(run_dir, threshold, run.solved_step, cfg.solved_window)
         print(f"\ninterrupted at step {step}: {run_dir} holds "
               f"{', '.join(sorted(f.name for f in run_dir.iterdir()))} "
               f"(replay: python {run.script}.py --eval {run_dir})", flush=True)
@@ -154,7 +154,8 @@ def finish_cartpole(run, threshold, nets, device, reward_scale):
     inside_drawn = lambda: None  # noqa: E731
     if cfg.curves:
         with common.ctrl_c_deferred():  # Ctrl-C waits until curve.png is whole
-            print(f"curve: {plots.draw_run(run_dir, threshold, run.solved_step)}", flush=True)
+            curve = plots.draw_run(run_dir, threshold, run.solved_step, cfg.solved_window)
+            print(f"curve: {curve}", flush=True)
         inside_drawn = draw_inside(run, nets, device, reward_scale)  # aside, while evaluating
     try:
         if cfg.tensorboard:

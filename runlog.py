@@ -139,7 +139,7 @@ class UpdateLog:
         """A progress.csv row: the step, the episodes so far, their recent mean, `columns`."""
         append_csv(self.dir / "progress.csv", dict(
             global_step=self.global_step, episodes=len(self.episodes),
-            return_mean20=self.recent_return(), **columns))
+            recent_return=self.recent_return(), **columns))
 
     def stopped_row(self, **columns):
         """progress.csv's last row, where training stopped inside a rollout: no update, so its

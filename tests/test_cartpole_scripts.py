@@ -47,7 +47,7 @@ def test_smoke_run_writes_gifs_model_csv_and_curve(script, tmp_path):
     assert ckpt["config"]["env_id"] == "CartPole-v1" and ckpt["global_step"] == result["global_step"]
     log = rows(run / "progress.csv")
     assert len(log) >= 2 and int(log[-1]["global_step"]) == result["global_step"]
-    assert {"global_step", "episodes", "return_mean20", "loss_pi", "loss_v", "entropy"} <= set(log[0])
+    assert {"global_step", "episodes", "recent_return", "loss_pi", "loss_v", "entropy"} <= set(log[0])
     episodes = rows(run / "episodes.csv")
     assert len(episodes) == len(result["episode_returns"]) == int(log[-1]["episodes"])
     assert [float(e["return"]) for e in episodes] == result["episode_returns"]
@@ -70,7 +70,7 @@ def test_the_last_progress_row_is_where_training_ended(script, tmp_path):
     assert result["solved"]
     last = rows(result["run_dir"] / "progress.csv")[-1]
     assert int(last["global_step"]) == result["solved_step"] == result["global_step"]
-    assert float(last["return_mean20"]) >= 30 and last["loss_pi"] == "nan"  # no update on it
+    assert float(last["recent_return"]) >= 30 and last["loss_pi"] == "nan"  # no update on it
 
 
 def test_max_grad_norm_zero_means_no_clipping(script, tmp_path):

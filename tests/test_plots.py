@@ -98,7 +98,7 @@ def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path):
     fig = plots.compare_figure([short, long, walker])
     panels = {ax.get_title(): ax for ax in fig.axes}
     assert set(panels) == {"CartPole-v1", "Walker2d-v5"}
-    assert "mean return of the last 20 training episodes" in \
+    assert "mean return of the recent training episodes" in \
         " ".join(panels["CartPole-v1"].get_ylabel().split())
     assert "evaluation return" in " ".join(panels["Walker2d-v5"].get_ylabel().split())
     curves = {run: plots.read_csv(run / "progress.csv") for run in (short, long)}
@@ -110,7 +110,7 @@ def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path):
         assert x.max() <= curves[long]["global_step"][-1]
         if x.max() > short_end:  # only the long run itself goes on past the short run's end
             assert list(x) == list(curves[long]["global_step"])
-            assert list(y) == list(curves[long]["return_mean20"])
+            assert list(y) == list(curves[long]["recent_return"])
     walker_x = [line.get_xdata() for line in panels["Walker2d-v5"].lines if len(line.get_xdata())]
     assert [x.max() for x in walker_x] == [60_000]
     p = run_script("plots.py", short, long, walker, "--out", tmp_path / "compare.png")

@@ -72,9 +72,9 @@ def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path):
     assert run.solved(10.0)
     run.stopped_row(running_reward=4.0, lr=0.5)
     rows = list(csv.DictReader(open(run.dir / "progress.csv")))
-    assert rows == [dict(global_step="64", episodes="20", return_mean20="12", running_reward="3",
+    assert rows == [dict(global_step="64", episodes="20", recent_return="12", running_reward="3",
                          lr="0.001", loss_pi="0.5", loss_v="0.25"),
-                    dict(global_step="70", episodes="20", return_mean20="12", running_reward="4",
+                    dict(global_step="70", episodes="20", recent_return="12", running_reward="4",
                          lr="0.5", loss_pi="nan", loss_v="nan")]
     assert run.solved_step == 70
 
