@@ -1,26 +1,20 @@
-"""Learning curves from run folders: each run's curve.png, and several runs compared.
+"""The pictures: each run's curve.png and inside.png, several runs compared, TensorBoard.
 
-The scripts call draw_run(run_dir) after training (DDPG: after every evaluation) to
-write run_dir/curve.png. From the command line, compare runs: one panel per env, titled
-with it and labelled with what it plots (CartPole scripts: the mean return of the recent
-training episodes, the solved rule's window; DDPG: the evaluation return); in it, one colour per script, each
-run a thin line that ends where the run stopped, and the mean of a script's runs (thick)
-over the steps where all of them ran.
+From the command line, compare runs: a panel per env, a colour per script, each run a thin
+line that ends where the run stopped, their mean (thick) where all of them ran.
 
     python plots.py runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> compare.png
     python plots.py runs/ddpg_walker__* --out walker.png
     python plots.py --maps runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> maps.png
 
-matplotlib is imported only here, with its Agg backend (no display needed): by
-DDPG at its first evaluation, by the CartPole scripts after training. Labels are ASCII:
-not every machine has CJK fonts.
-
-to_tensorboard(run_dir) writes the same CSV logs as TensorBoard scalars, under
-CleanRL's tag names, so that our runs and CleanRL's overlay in one TensorBoard.
+matplotlib is imported only here, with its Agg backend (no display needed); labels are
+ASCII (not every machine has CJK fonts). to_tensorboard writes the CSV logs as TensorBoard
+scalars under CleanRL's tag names, so that our runs and CleanRL's overlay.
 """
 
 import argparse
 import csv
+import importlib.util
 import sys
 import textwrap
 from pathlib import Path
@@ -68,8 +62,7 @@ def draw_run(run_dir, solved_return=None, solved_step=None, window=20):
 
 
 def save_whole(plt, fig, path, dpi):
-    """Save `fig` as `path`, written aside then renamed: a reader never sees half a file,
-    Ctrl-C or not; close it. Returns `path`."""
+    """Save `fig` as `path`, written whole (aside, then renamed), Ctrl-C or not; close it."""
     tmp = Path(f"{path}.tmp.png")
     try:
         fig.savefig(tmp, dpi=dpi)
@@ -118,8 +111,7 @@ def draw_ddpg(plt, evaluations):
     ax.fill_between(x, mean - std, mean + std, color="C0", alpha=0.2, label="+- std")
     ax.plot(x, evaluations["train_return_mean10"], color="C1", lw=1,
             label="training: mean of the last 10 episodes")
-    ax.set_xlabel("env steps")
-    ax.set_ylabel("return")
+    ax.set(xlabel="env steps", ylabel="return")
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     return fig
@@ -129,10 +121,9 @@ def draw_ddpg(plt, evaluations):
 
 
 def draw_inside(run_dir, script, cfg, kept=None, maps=None):
-    """Write run_dir/inside.png, the picture of what the algorithm does inside (see
-    docs/inside.md); returns its path. `cfg`: the run's settings; `kept`: (env step, {name:
-    array}) per update (PPO-clip: the batch's ratios and advantages; A2C: V and its targets);
-    `maps`: {"untrained"/"trained": cartpole map} (V and pi(right|s), CartPole scripts)."""
+    """Write run_dir/inside.png (docs/inside.md); returns its path. `kept`: (env step, {name:
+    array}) per update (PPO-clip: ratios and advantages; A2C: V and its targets); `maps`:
+    CartPole's maps (report.draw_inside)."""
     run_dir, plt = Path(run_dir), pyplot()
     rows = 1 + (script == "ppo_cartpole") + (maps is not None)
     height = 3.3 * rows  # inches; margins of half an inch above and below
@@ -205,8 +196,7 @@ def ratio_panels(fig, grid, progress, kept, eps):
 
 
 def beta_panels(fig, grid, progress, cfg):
-    """PPO-penalty: the KL after each update against [d_targ / 1.5, 1.5 d_targ], and beta
-    (log axis), with the updates where it was halved or doubled marked."""
+    """PPO-penalty: the KL against [d_targ / 1.5, 1.5 d_targ]; beta, its changes marked."""
     x, kl, beta = progress["global_step"], progress["kl"], progress["beta"]
     lo, hi = cfg["d_targ"] / cfg["kl_tolerance"], cfg["d_targ"] * cfg["kl_tolerance"]
     ax = fig.add_subplot(grid[0, :2])
@@ -230,8 +220,7 @@ def beta_panels(fig, grid, progress, cfg):
 
 
 def value_fit_panels(fig, grid, progress, kept):
-    """A2C: how much of its targets' variance V explains, per update; V(s_t) against the
-    n-step return R_t it is trained toward, at three updates."""
+    """A2C: the share of its targets' variance V explains; V(s_t) against R_t at 3 updates."""
     ax = fig.add_subplot(grid[0, 0])
     ax.plot(progress["global_step"], progress["explained_var"], color="C0", lw=1)
     ax.set_ylim(-1, 1.05)
@@ -249,10 +238,9 @@ def value_fit_panels(fig, grid, progress, kept):
 
 
 def map_panels(fig, cell, maps, title=""):
-    """V(s) and pi(right|s) over pole angle and angular velocity, for each map in `maps`
-    ("untrained", "trained"), in the grid cell `cell`; with maps["true"], the Monte-Carlo
-    V^pi(s) of the trained policy beside its V, on one colour scale, and with
-    maps["visited"], the states the policy visited marked on both."""
+    """V(s) and pi(right|s) over pole angle and angular velocity of maps "untrained" and
+    "trained" in grid cell `cell`; the true V^pi (maps["true"]) beside V on its colour scale,
+    the visited states (maps["visited"]) marked on both."""
     panels = [(k, w) for k in ("value", "right") for w in ("untrained", "trained", "true")
               if w in maps and not (k == "right" and w == "true")]
     sub = cell.subgridspec(1, len(panels), wspace=0.75)
@@ -279,9 +267,8 @@ def map_panels(fig, cell, maps, title=""):
 
 
 def overestimation(ax, evaluations):
-    """DDPG and TD3 (after the TD3 paper's Fig. 1, a variant: the states are the evaluations'):
-    the critic's Q(s, mu(s)) against the discounted return mu obtained from the same states,
-    at each evaluation."""
+    """DDPG and TD3, after the TD3 paper's Fig. 1: the critic's Q(s, mu(s)) against the
+    discounted return mu obtained from the same states (the evaluations'), per evaluation."""
     x = evaluations["global_step"]
     ax.plot(x, evaluations["q_estimate"], color="C3", lw=1.5, label="critic: Q(s, mu(s))")
     ax.plot(x, evaluations["discounted_return"], color="C0", lw=1.5,
@@ -303,16 +290,12 @@ NO_TENSORBOARD = "--tensorboard needs the tensorboard package: pip install tenso
 
 
 def tensorboard_installed():
-    try:
-        import tensorboard  # noqa: F401
-        return True
-    except ImportError:
-        return False
+    return importlib.util.find_spec("tensorboard") is not None
 
 
 def to_tensorboard(run_dir, sps=None):
-    """(Re)write run_dir's TensorBoard event file from its CSV logs, step by step, and
-    `sps` (env steps per second so far; kept out of the CSVs, which are reproducible)."""
+    """(Re)write run_dir's TensorBoard events from its CSV logs, and `sps` (steps/s so far,
+    kept out of the CSVs, which are reproducible)."""
     from torch.utils.tensorboard import SummaryWriter
 
     run_dir = Path(run_dir)
@@ -337,8 +320,7 @@ RECENT = "mean return of the recent training episodes (the solved rule's window)
 
 def curve_of(run_dir):
     """(steps, values, what the values are) of one run, points without a value dropped:
-    DDPG's evaluation means (evaluations.csv), or the CartPole scripts' mean return of the
-    last solved_window (default 20) training episodes after each update (progress.csv)."""
+    DDPG's evaluation means, or the CartPole scripts' recent_return after each update."""
     if (run_dir / "evaluations.csv").exists():
         table, column, what = read_csv(run_dir / "evaluations.csv"), "eval_mean", EVAL_RETURN
     else:
@@ -350,10 +332,8 @@ def curve_of(run_dir):
 
 
 def compare_figure(run_dirs):
-    """The figure of compare(): one panel per env and measure, titled with the env and
-    labelled with what it plots. Per script, each run as a thin line that ends where the run
-    stopped (a run solved early is not drawn on past its end), and their mean (thick) over
-    the steps where every one of them has a value."""
+    """The figure of compare(): a panel per env and measure; per script, each run a thin line
+    that ends where the run stopped, and their mean (thick) where every one has a value."""
     panels = {}  # (env, what) -> {script: [(steps, values), ...]}
     for run_dir in map(Path, run_dirs):
         if not ((run_dir / "progress.csv").exists() or (run_dir / "evaluations.csv").exists()):
@@ -398,8 +378,7 @@ def compare(run_dirs, out):
 
 
 def compare_maps(run_dirs, out):
-    """Write `out`: the trained V(s) and pi(right|s) of several CartPole runs (their
-    maps.npz), a row per run, so that the scripts' critics and policies sit side by side."""
+    """Write `out`: the trained V(s) and pi(right|s) of CartPole runs (maps.npz), a row each."""
     plt, found = pyplot(), []
     for run_dir in map(Path, run_dirs):
         if not (run_dir / "maps.npz").exists():  # e.g. --no-curves, or a DDPG run: skipped

@@ -3,9 +3,6 @@ CartPole's maps of V and pi beside the true V), the evaluations and GIFs at the 
 model.pt / best.pt / best.gif at DDPG's evaluations, and --eval / --watch / --gif playback.
 """
 
-import os
-import signal
-import sys
 import time
 from dataclasses import asdict
 
@@ -85,10 +82,9 @@ def cartpole_true_values(logits_of, device, gamma, reward_scale, seed, n=11, rol
 
 
 def draw_inside(run, nets, device, reward_scale):
-    """Start drawing inside.png (plots.draw_inside): what the updates did and, on CartPole,
-    V(s) and pi(right|s) untrained and trained, beside the true V of the trained pi and the
-    states visited, also kept in maps.npz. `nets`: {"untrained"/"trained": (obs -> logits,
-    obs -> V)}. Returns a function that waits until the picture is written."""
+    """inside.png (plots.draw_inside): what the updates did and, on CartPole, V(s) and
+    pi(right|s) untrained and trained, the true V of the trained pi and the states visited,
+    also kept in maps.npz. `nets`: {"untrained"/"trained": (obs -> logits, obs -> V)}."""
     cfg, maps = run.cfg, None
     if cfg.env_id.startswith("CartPole"):
         maps = {when: cartpole_maps(*fns, device) for when, fns in nets.items()}
@@ -102,32 +98,7 @@ def draw_inside(run, nets, device, reward_scale):
                      angle=maps["trained"]["angle"], velocity=maps["trained"]["velocity"],
                      true_value=true["value"], true_angle=true["angle"],
                      true_velocity=true["velocity"], visited=visited)
-    return aside(plots.draw_inside, run.dir, run.script, asdict(cfg), run.kept, maps)
-
-
-def aside(draw, *args):
-    """Call draw(*args) (a picture: numpy and matplotlib only) in a forked child process, so
-    that it overlaps what this process does next; where there is no fork (or off Linux) call
-    it now. Returns a function that waits for it and says where the picture is."""
-    if sys.platform != "linux":
-        path = draw(*args)
-        return lambda: print(f"inside: {path}", flush=True)
-    pid = os.fork()
-    if pid == 0:  # the child: draw, then leave without the parent's exit handlers
-        signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the parent's to handle
-        code = 1
-        try:
-            print(f"inside: {draw(*args)}", flush=True)
-            code = 0
-        finally:
-            os._exit(code)
-
-    def wait():
-        with common.ctrl_c_deferred():
-            _, status = os.waitpid(pid, 0)
-        if status != 0:
-            print("warning: inside.png could not be drawn", file=sys.stderr, flush=True)
-    return wait
+    return plots.draw_inside(run.dir, run.script, asdict(cfg), run.kept, maps)
 
 
 def finish_cartpole(run, threshold, nets, device, reward_scale):
@@ -151,32 +122,28 @@ def finish_cartpole(run, threshold, nets, device, reward_scale):
     elapsed = time.time() - run.start_time
     print(f"trained {step} steps, {len(run.episodes)} episodes in {elapsed:.1f}s; "
           f"model: {run_dir / 'model.pt'}", flush=True)
-    inside_drawn = lambda: None  # noqa: E731
     if cfg.curves:
-        with common.ctrl_c_deferred():  # Ctrl-C waits until curve.png is whole
+        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
             curve = plots.draw_run(run_dir, threshold, run.solved_step, cfg.solved_window)
-            print(f"curve: {curve}", flush=True)
-        inside_drawn = draw_inside(run, nets, device, reward_scale)  # aside, while evaluating
-    try:
-        if cfg.tensorboard:
-            plots.to_tensorboard(run_dir, sps=step / elapsed)
-        # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
-        # policy that "solved" judged), and pi's most probable action (greedy). They can differ
-        # either way: a policy trained to be sampled need not be good when it is not.
-        n, seed, logits_of = cfg.eval_episodes, cfg.eval_seed, nets["trained"][0]
-        for key, greedy, what in (("eval_returns", False, "actions drawn from pi"),
-                                  ("greedy_returns", True, "pi's most probable action")):
-            act = common.pi_actions(logits_of, device, seed, greedy=greedy)
-            result[key] = returns = common.evaluate(cfg.env_id, act, n, seed)
-            print(f"{'greedy ' if greedy else ''}evaluation over {n} episodes, {what}: mean "
-                  f"{np.mean(returns):.1f}, min {min(returns):.0f}", flush=True)
-        if cfg.gifs:  # one episode each, drawn from pi: after.gif shows the evaluation's first
-            for name, when in (("before.gif", "untrained"), ("after.gif", "trained")):
-                act = common.pi_actions(nets[when][0], device, seed)  # every 2nd frame, half size
-                ret = common.record_gif(cfg.env_id, act, run_dir / name, seed, every=2, scale=2)
-                print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
-    finally:
-        inside_drawn()  # a Ctrl-C too waits for inside.png (a second or less)
+            print(f"curve: {curve}\ninside: {draw_inside(run, nets, device, reward_scale)}",
+                  flush=True)
+    if cfg.tensorboard:
+        plots.to_tensorboard(run_dir, sps=step / elapsed)
+    # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
+    # policy that "solved" judged), and pi's most probable action (greedy). They can differ
+    # either way: a policy trained to be sampled need not be good when it is not.
+    n, seed, logits_of = cfg.eval_episodes, cfg.eval_seed, nets["trained"][0]
+    for key, greedy, what in (("eval_returns", False, "actions drawn from pi"),
+                              ("greedy_returns", True, "pi's most probable action")):
+        act = common.pi_actions(logits_of, device, seed, greedy=greedy)
+        result[key] = returns = common.evaluate(cfg.env_id, act, n, seed)
+        print(f"{'greedy ' if greedy else ''}evaluation over {n} episodes, {what}: mean "
+              f"{np.mean(returns):.1f}, min {min(returns):.0f}", flush=True)
+    if cfg.gifs:  # one episode each, drawn from pi: after.gif shows the evaluation's first
+        for name, when in (("before.gif", "untrained"), ("after.gif", "trained")):
+            act = common.pi_actions(nets[when][0], device, seed)  # every 2nd frame, half size
+            ret = common.record_gif(cfg.env_id, act, run_dir / name, seed, every=2, scale=2)
+            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
     return result
 
 
