@@ -1,5 +1,6 @@
-"""The command line: the flags every script shares, a script's Config read from flags, and
-one-line errors with their exit codes (2: bad input, 130: Ctrl-C). A reader may skip it.
+"""The command line: the flags every script shares (the output flags, the solved rule's
+settings, DDPG's checkpoints), a script's Config read from flags, and one-line errors with
+their exit codes (2: bad input, 130: Ctrl-C).
 
 A Config is a @dataclass; each field is a flag (`num_envs: int = 8` -> `--num-envs 8`), its
 help the string under it, bool -> `--x/--no-x`, `float | None` also takes `none`.

@@ -1,6 +1,7 @@
-"""What a run shows: the solved rule's check of pi, the pictures (curve.png, inside.png with
-CartPole's maps of V and pi beside the true V), the evaluations and GIFs at the end of a run,
-model.pt / best.pt / best.gif at DDPG's evaluations, and --eval / --watch / --gif playback.
+"""What a run plays and shows: the solved rule's second half (pi as it is now plays its check),
+the pictures (curve.png, inside.png with CartPole's maps of V and pi beside the true V), the
+evaluations and GIFs at the end of a run, model.pt / best.pt / best.gif at DDPG's
+evaluations, and --eval / --watch / --gif playback.
 """
 
 import time

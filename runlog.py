@@ -1,5 +1,6 @@
 """The run folder and its logs: CSV rows written as they come, progress lines, the finished
-episodes, and the check that stops a diverged run. It decides nothing: the scripts' loops do.
+episodes and their recent mean (what the solved rule compares), and the check that stops a
+diverged run. When to stop is decided in the scripts' loops, from what this keeps.
 """
 
 import contextlib
