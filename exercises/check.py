@@ -19,6 +19,7 @@ import contextlib
 import csv
 import importlib
 import importlib.util
+import inspect
 import io
 import math
 import sys
@@ -202,22 +203,36 @@ def compare(name, got, expected):
                          f"{tuple(got.shape)} (a (B, 1) against a (B,) broadcasts silently)")
         close = torch.isclose(got.detach().float(), expected, atol=1e-5, rtol=1e-5)
         if not close.all():
-            i = tuple(int(k) for k in (~close).nonzero()[0])
+            wrong = [tuple(int(k) for k in i) for i in (~close).nonzero()]
+            i = wrong[0]
+            also = f" (all that differ: {', '.join(map(str, wrong[:8]))})" if len(wrong) > 1 else ""
             raise Failed(f"{name}: first difference at index {i}: expected "
-                         f"{expected[i].item():.6g}, got {got[i].item():.6g}\n  expected "
-                         f"{expected.tolist()}\n  got      {got.detach().tolist()}")
+                         f"{expected[i].item():.6g}, got {got[i].item():.6g}{also}\n  expected "
+                         f"{rounded(expected)}\n  got      {rounded(got)}")
         return
     if not isinstance(got, (int, float)) or abs(float(got) - float(expected)) > 1e-5:
         raise Failed(f"{name}: expected {expected:.6g}, got {got!r}")
 
 
-def show(args):
-    """The case's inputs in a line: tensors as lists, a batch dict by its keys."""
+def rounded(x):
+    """A tensor as nested lists of numbers to 6 significant digits (float32's noise left out)."""
+    x = x.detach().tolist()
+    return [rounded(torch.tensor(v)) for v in x] if isinstance(x, list) and x and isinstance(
+        x[0], list) else [float(f"{v:.6g}") for v in x] if isinstance(x, list) else float(f"{x:.6g}")
+
+
+def show(ex, args):
+    """The case's inputs, named as the function's parameters: tensors as lists, a batch dict
+    by its keys, networks and settings left out."""
     def one(a):
         if isinstance(a, dict):
             return "{" + ", ".join(f"{k}: {one(v)}" for k, v in a.items() if k != "obs") + "}"
-        return str(a.tolist()) if torch.is_tensor(a) else repr(a)
-    return ", ".join(one(a) for a in args if not callable(a) and not isinstance(a, SimpleNamespace))
+        if torch.is_tensor(a):
+            return str(a.tolist() if a.dtype == torch.bool else rounded(a))
+        return repr(a)
+    names = inspect.signature(getattr(ex.owner(), ex.function)).parameters
+    return ", ".join(f"{name}={one(a)}" for name, a in zip(names, args)
+                     if not callable(a) and not isinstance(a, SimpleNamespace))
 
 
 def worked_cases(ex, fn):
@@ -234,11 +249,11 @@ def worked_cases(ex, fn):
                 if not isinstance(got, tuple) or len(got) < len(expected):
                     raise Failed(f"expected a tuple of {len(expected)}, got {type(got).__name__}")
                 for i, e in enumerate(expected):
-                    compare(f"output {i}", got[i], e)
+                    compare(ex.outputs[i], got[i], e)
             else:
-                compare("output", got, expected)
+                compare(ex.outputs[0], got, expected)
         except Failed as e:
-            raise Failed(f"case: {what}\n  input: {show(args)}\n  {e}") from None
+            raise Failed(f"case: {what}\n  input: {show(ex, args)}\n  {e}") from None
 
 
 # ==== Stage (b): the real loop, beside the script's own function ============================
@@ -249,16 +264,21 @@ def loop_logs(ex, fn, tmp):
     script's own, fn=None)."""
     script = importlib.import_module(ex.script)
     swaps = [] if fn is None else [(ex.owner(), ex.function, fn)]
-    out = io.StringIO()
-    with swapped(swaps), contextlib.redirect_stdout(out):
+    losses = []  # DDPG: every update's two losses, to 6 significant digits
+    if ex.script.startswith("ddpg"):
+        update = script.ddpg_update
+
+        def recorded(*args):
+            out = update(*args)
+            losses.append(dict(critic_loss=f"{out[0].item():.6g}", actor_loss=f"{out[1].item():.6g}"))
+            return out
+        swaps.append((script, "ddpg_update", recorded))
+    with swapped(swaps), contextlib.redirect_stdout(io.StringIO()):
         result = script.train(script.Config(**ex.loop, run_dir=str(tmp)))
     run = Path(result["run_dir"])
-    if ex.script.startswith("ddpg"):  # a progress line per step: its two losses
-        rows = [dict(step=line.split()[1], critic_loss=line.split()[-4],
-                     actor_loss=line.split()[-2]) for line in out.getvalue().splitlines()
-                if "critic_loss" in line]
-        return rows + [dict(r, where="evaluation") for r in csv.DictReader(
-            open(run / "evaluations.csv"))]
+    if losses:
+        return [dict(row, step=str(ex.loop["start_steps"] + i + 1)) for i, row in enumerate(losses)] + [
+            dict(r, where="evaluation") for r in csv.DictReader(open(run / "evaluations.csv"))]
     return list(csv.DictReader(open(run / "progress.csv")))
 
 
@@ -285,7 +305,7 @@ def real_loop(ex, fn):
                      else f"{unit} {a['step'] if 'step' in a else i + 1}")
             raise Failed(f"{ex.script}.train() with your function: the logs first differ at "
                          f"{where}, in {key}: the script's own gives {a[key]}, yours {b.get(key)}"
-                         f"\n  ({ex.loop_hint})")
+                         f"\n  {ex.loop_hint}")
     if len(reference) != len(yours):
         raise Failed(f"{ex.script}.train() with your function logged {len(yours)} rows, the "
                      f"script's own {len(reference)}")
@@ -322,38 +342,45 @@ DDPG_LEARN = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=20_000, print_every=1
                   gifs=False, curves=False, cuda=False)
 
 
-def exercise(name, script, function, owner, cases, loop, learn, hint):
+GRADIENT = ("Your values passed the worked cases, and training still went another way: look at "
+            "what your\n  loss does to the gradient (a .detach(), or a tensor that does not "
+            "come from the network\n  being trained, cuts it).")
+
+
+def exercise(name, script, function, owner, cases, loop, learn, hint, outputs=("output",)):
     return SimpleNamespace(name=name, script=script, function=function, cases=cases,
                            owner=lambda: importlib.import_module(owner), loop=loop,
-                           learn=learn, loop_hint=hint)
+                           learn=learn, loop_hint=hint, outputs=outputs)
 
 
 EXERCISES = {ex.name: ex for ex in (
     exercise("discounted_returns", "actor_critic_cartpole", "discounted_returns", "common",
              returns_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN,
-             "A2C's critic targets R_t come from your returns"),
+             "A2C's critic targets R_t come from your returns: the first update that differs is"
+             "\n  where your returns differ on real rollouts (several envs, autoreset steps).",
+             outputs=("returns",)),
     exercise("gae", "ppo_cartpole", "gae", "common", gae_cases,
              dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
-             "PPO's advantages and value targets come from your GAE"),
+             "PPO's advantages and value targets come from your GAE: the first update that"
+             "\n  differs is where your GAE differs on real rollouts.", outputs=("advantages",)),
     exercise("clipped_surrogate", "ppo_cartpole", "compute_loss_pi", "ppo_cartpole",
-             clip_cases, dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
-             "the worked cases check values; the loop also sees what the gradient does"),
+             clip_cases, dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN, GRADIENT,
+             outputs=("loss_pi", "entropy", "info")),
     exercise("kl_penalty", "ppo_kl_cartpole", "compute_loss_pi", "ppo_kl_cartpole", kl_cases,
-             dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
-             "the worked cases check values; the loop also sees what the gradient does"),
+             dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN, GRADIENT,
+             outputs=("loss_pi", "entropy", "info")),
     exercise("adapt_beta", "ppo_kl_cartpole", "adapt_beta", "ppo_kl_cartpole", beta_cases,
              dict(CARTPOLE_LOOP, total_timesteps=2560), CARTPOLE_LEARN,
-             "each update's beta comes from your rule"),
+             "Each update's beta comes from your rule.", outputs=("beta",)),
     exercise("a2c_loss", "actor_critic_cartpole", "a2c_loss", "actor_critic_cartpole",
-             a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN,
-             "the worked cases check values; the loop also sees what the gradient does"),
+             a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN, GRADIENT,
+             outputs=("loss", "stats")),
     exercise("td_target", "ddpg_walker", "td_target", "ddpg_walker", td_cases, DDPG_LOOP,
-             DDPG_LEARN, "the critic is trained toward your targets"),
+             DDPG_LEARN, "The critic is trained toward your targets.", outputs=("y",)),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
-             DDPG_LOOP, DDPG_LEARN,
-             "the worked cases check values; the loop also sees what the gradient does"),
+             DDPG_LOOP, DDPG_LEARN, GRADIENT, outputs=("actor_loss",)),
     exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", soft_cases, DDPG_LOOP,
-             DDPG_LEARN, "the targets move by your soft update"),
+             DDPG_LEARN, "The targets move by your soft update."),
 )}
 
 
@@ -407,8 +434,10 @@ def main(argv=None):
         lines = []
         passed = check(name, learning=False, say=lines.append)
         stage, _, why = lines[-1].removeprefix(f"{name}: ").partition(": FAIL: ")
-        print(f"{name:20} " + ("(a) and (b) pass" if passed else
-                                f"FAIL at {stage}: {why.splitlines()[0]}"), flush=True)
+        verdict = "(a) and (b) pass" if passed else f"FAIL at {stage}: {why.splitlines()[0]}"
+        if name in BUGS and not passed:  # where it fails would give the bug away
+            verdict = "not fixed yet"
+        print(f"{name:20} {verdict}", flush=True)
     print("(stage (c), learning, runs one exercise at a time: python exercises/check.py NAME)")
 
 
