@@ -75,11 +75,11 @@ def save_model(path, script, cfg, step, nets, **info):
 def load_model(path, script, key, build):
     """--eval: the network saved under `key` at `path` (model.pt, best.pt or a run folder),
     made by `build(checkpoint)` (the script's constructor call) with its weights. Returns the
-    network and the saved run's env id."""
-    ckpt = load_checkpoint(path, script=script, required=(key, "obs_dim", "config"))
+    network and the saved run's env id (None for a task that is not an env)."""
+    ckpt = load_checkpoint(path, script=script, required=(key, "config"))
     net = build(ckpt)
     load_state(net, ckpt[key], path)
-    return net, ckpt["config"]["env_id"]
+    return net, ckpt["config"].get("env_id")
 
 
 def config_to_resume(cfg, script):

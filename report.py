@@ -255,3 +255,52 @@ def watch_camera(env_id):
     view = dict(env.unwrapped.mujoco_renderer.default_cam_config or {})
     env.close()
     return dict(default_camera_config={**view, "type": mujoco.mjtCamera.mjCAMERA_TRACKING})
+
+
+def finish_grpo(run, samples, cfg):
+    """After GRPO's run: its pictures (draw_grpo) and TensorBoard, as asked."""
+    if cfg.curves:
+        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+            draw_grpo(run, samples, cfg)
+    if cfg.tensorboard:
+        plots.to_tensorboard(run.dir)
+
+
+def draw_grpo(run, samples, cfg):
+    """GRPO's pictures. curve.png: the reward of the sampled completions, held-out pass@1, the
+    KL to pi_ref and the share of groups whose rewards are all equal (no signal), over the
+    steps. inside.png: the per-token ratio pi / pi_old at three GRPO updates against the
+    clip band, and held-out prompts' completions before and after GRPO (x: wrong)."""
+    plt, log = plots.pyplot(), plots.read_csv(run.dir / "progress.csv")
+    x, grpo = log["global_step"], np.isfinite(log["reward"])
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
+    top.plot(x[grpo], log["reward"][grpo], color="C0", lw=0.8, label="reward of the samples")
+    checked = np.isfinite(log["pass1"])
+    top.plot(x[checked], log["pass1"][checked], "o-", color="C3", ms=3, label="held-out pass@1")
+    bottom.plot(x[grpo], log["kl"][grpo], color="C4", lw=0.8, label="KL(pi || pi_ref), k3")
+    bottom.plot(x[grpo], log["flat_groups"][grpo], color="C7", lw=0.8,
+                label="groups with equal rewards (no signal)")
+    for ax in (top, bottom):
+        ax.axvline(cfg.sft_steps, color="gray", ls=":", lw=1)
+        ax.legend(fontsize=8)
+    top.set_title(f"{run.dir.name}\nsupervised until the dotted line, then "
+                  f"{'more supervision' if cfg.control else 'GRPO'}", fontsize=8)
+    bottom.set_xlabel("step")
+    fig.tight_layout()
+    print(f"curve: {plots.save_whole(plt, fig, run.dir / 'curve.png', dpi=90)}", flush=True)
+    fig = plt.figure(figsize=(12, 8))
+    grid = fig.add_gridspec(3, 3, hspace=0.5)
+    updates = [k for k in run.kept if "ratio" in k[1]]  # none with --control
+    for column, (update, step, arrays) in enumerate(plots.three_updates(updates) if updates else []):
+        ax = fig.add_subplot(grid[0, column])
+        ax.hist(arrays["ratio"], bins=40, color="C0")
+        for v in (1 - cfg.clip_coef, 1 + cfg.clip_coef):
+            ax.axvline(v, color="k", ls="--", lw=0.8)
+        ax.set_title(f"per-token r = pi/pi_old, GRPO update {update}", fontsize=8)
+    for row, when in enumerate(("before", "after"), start=1):
+        ax = fig.add_subplot(grid[row, :])
+        ax.axis("off")
+        ax.set_title(f"held-out prompts and {cfg.group_size} answers each (x: wrong), {when} "
+                     f"{'GRPO' if not cfg.control else 'more supervision'}", fontsize=9)
+        ax.text(0, 1, "\n".join(samples.get(when, [])), va="top", family="monospace", fontsize=8)
+    print(f"inside: {plots.save_whole(plt, fig, run.dir / 'inside.png', dpi=72)}", flush=True)

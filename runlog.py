@@ -77,10 +77,11 @@ class UpdateLog:
     episodes (episodes.csv at the end) and the mean return of the last solved_window of them;
     what inside.png draws (the updates' arrays, the states visited)."""
 
-    def __init__(self, script, cfg, shown):
+    def __init__(self, script, cfg, shown, task=None):
         self.script, self.cfg, self.shown = script, cfg, shown
+        self.window = getattr(cfg, "solved_window", None)  # none: no episodes to average
         self.start_time = time.time()
-        self.dir = make_run_dir(cfg.run_dir, script, cfg.env_id, cfg.seed)
+        self.dir = make_run_dir(cfg.run_dir, script, task or cfg.env_id, cfg.seed)
         print(f"run folder: {self.dir}", flush=True)
         self.episodes = []  # (env step, return) of every finished training episode, in order
         self.kept, self.visited = [], []  # each update's arrays; the last batches' obs
@@ -89,7 +90,7 @@ class UpdateLog:
 
     def recent_return(self):
         """The mean return of the last solved_window finished training episodes."""
-        recent = [r for _, r in self.episodes[-self.cfg.solved_window:]]
+        recent = [r for _, r in self.episodes[-self.window:]]
         return float(np.mean(recent)) if recent else np.nan
 
     def episodes_ended(self, info, step):
@@ -105,11 +106,11 @@ class UpdateLog:
     def solved(self, threshold):
         """Has the mean return of the last solved_window episodes reached `threshold`? Says so
         the first time."""
-        if len(self.episodes) < self.cfg.solved_window or self.recent_return() < threshold:
+        if len(self.episodes) < self.window or self.recent_return() < threshold:
             return False
         if self.solved_step is None:
             self.solved_step = self.global_step
-            print(f"solved: mean return of the last {self.cfg.solved_window} episodes "
+            print(f"solved: mean return of the last {self.window} episodes "
                   f"{self.recent_return():.1f} >= {threshold:g} at step {self.global_step} "
                   f"(episode {len(self.episodes)}) after {time.time() - self.start_time:.1f}s",
                   flush=True)
@@ -132,15 +133,17 @@ class UpdateLog:
             numbers = "  ".join(f"{key.replace('_', ' ') if key == 'running_reward' else key} "
                                 f"{shown[key]:{form}}" for key, form in self.shown.items()
                                 if key in shown)
+            recent = f"return({self.window}) {self.recent_return():6.1f}  " if self.window else ""
             print(f"step {self.global_step:>7}  {self.global_step / elapsed:6.0f} steps/s  "
-                  f"return({self.cfg.solved_window}) {self.recent_return():6.1f}  {numbers}  "
-                  f"{elapsed:.1f}s", flush=True)
+                  f"{recent}{numbers}  {elapsed:.1f}s", flush=True)
 
     def row(self, **columns):
-        """A progress.csv row: the step, the episodes so far, their recent mean, `columns`."""
-        append_csv(self.dir / "progress.csv", dict(
-            global_step=self.global_step, episodes=len(self.episodes),
-            recent_return=self.recent_return(), **columns))
+        """A progress.csv row: the step, the episodes so far and their recent mean (if there
+        is a solved rule), `columns`."""
+        episodes = (dict(episodes=len(self.episodes), recent_return=self.recent_return())
+                    if self.window else {})
+        append_csv(self.dir / "progress.csv", dict(global_step=self.global_step, **episodes,
+                                                   **columns))
 
     def stopped_row(self, **columns):
         """progress.csv's last row, where training stopped inside a rollout: no update, so its

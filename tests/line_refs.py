@@ -1,8 +1,9 @@
-"""The Chinese guide's code references, `file.py:LINE` `name`, kept true by a program: each
+"""The guides' code references, `file.py:LINE` `name` (README.zh-CN.md, docs/ppo_to_grpo*.md),
+kept true by a program: each
 LINE is made the line of `name` in that file nearest to the LINE written, so an edit that
 moves a script's lines moves its references with it.
 
-    python tests/line_refs.py          # rewrite README.zh-CN.md's line numbers; say which moved
+    python tests/line_refs.py          # rewrite the guides' line numbers; say which moved
     python tests/line_refs.py --check  # exit 1 if any is off (tests/test_readmes.py runs this)
 """
 
@@ -11,7 +12,8 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-GUIDE = ROOT / "README.zh-CN.md"
+GUIDES = [ROOT / "README.zh-CN.md", ROOT / "docs" / "ppo_to_grpo.md",
+          ROOT / "docs" / "ppo_to_grpo.zh-CN.md"]
 REF = re.compile(r"`(\w+\.py):(\d+)`")
 
 
@@ -67,16 +69,18 @@ def refreshed(text):
 
 
 def main(argv):
-    text = GUIDE.read_text(encoding="utf-8")
-    new, moved, problems = refreshed(text)
-    for old, now in moved:
-        print(f"{old} -> {now}")
-    for problem in problems:
-        print(f"error: {problem}", file=sys.stderr)
-    if "--check" in argv or problems:  # a problem: nothing is rewritten
-        return 1 if moved or problems else 0
-    GUIDE.write_text(new, encoding="utf-8")
-    return 0
+    code = 0
+    for guide in GUIDES:
+        new, moved, problems = refreshed(guide.read_text(encoding="utf-8"))
+        for old, now in moved:
+            print(f"{guide.name}: {old} -> {now}")
+        for problem in problems:
+            print(f"error: {guide.name}: {problem}", file=sys.stderr)
+        if "--check" in argv or problems:  # a problem: nothing is rewritten
+            code = max(code, 1 if moved or problems else 0)
+            continue
+        guide.write_text(new, encoding="utf-8")
+    return code
 
 
 if __name__ == "__main__":

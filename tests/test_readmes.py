@@ -8,6 +8,8 @@ import importlib
 import importlib.util
 import re
 import string
+
+import pytest
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -100,12 +102,14 @@ def test_readmes_link_each_other():
     assert "README.md" in ZH.read_text(encoding="utf-8")
 
 
-def test_code_references_point_at_their_names():
-    """Each `file.py:LINE` `name` of the Chinese guide is on the line of `name` nearest to
-    it; after an edit that moves lines, `python tests/line_refs.py` moves them back."""
+@pytest.mark.parametrize("guide", ["README.zh-CN.md", "docs/ppo_to_grpo.md",
+                                   "docs/ppo_to_grpo.zh-CN.md"])
+def test_code_references_point_at_their_names(guide):
+    """Each `file.py:LINE` `name` of a guide is on the line of `name` nearest to it; after an
+    edit that moves lines, `python tests/line_refs.py` moves them back."""
     import line_refs
 
-    text = ZH.read_text(encoding="utf-8")
+    text = (ROOT / guide).read_text(encoding="utf-8")
     _, moved, problems = line_refs.refreshed(text)
     assert not problems, problems
     assert not moved, f"run python tests/line_refs.py: {moved}"

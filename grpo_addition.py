@@ -1,0 +1,395 @@
+"""GRPO on a tiny transformer that learns to add (Shao et al. 2024, "DeepSeekMath", section 4:
+Group Relative Policy Optimization).
+
+Read after ppo_cartpole.py: the same PPO-clip ratio and the same KL penalty as
+ppo_kl_cartpole.py, on a language model. A state is the prompt and the tokens written so
+far, an action the next token, an episode one completion, the reward 1 if a program finds
+the sum right. docs/ppo_to_grpo.md maps each piece to its PPO line. The run, top to bottom:
+
+    supervise  a tiny character-level transformer on sums like "47+38=085.", a share of
+               whose labels drop the carry (supervised data that is wrong sometimes)
+    sample     G completions of each of B prompts from pi_old, the policy as it is now
+    reward     1 if a completion is the right sum, else 0: a verifier, no better labels
+    advantage  each completion's reward minus its group's mean, over the group's std
+    update     the PPO-clip ratio per token, minus beta times the KL to the supervised model
+               (k3), prompt and padding tokens masked out; no critic
+
+    python grpo_addition.py                 # supervise, then GRPO (a few minutes on a CPU)
+    python grpo_addition.py --eval runs/latest    # completions of the saved model
+
+中文导读：GRPO（组相对策略优化，DeepSeekMath 2024），把 PPO 用在语言模型上。状态是提示加上已经写出的
+字符，动作是下一个字符，一个回合是一次完整的回答，奖励由程序检查答案对不对（对为 1，错为 0）。
+先用有错误标签（有时漏掉进位）的数据做监督训练，模型只是有时答对；然后每个题目采样 G 个回答，
+每个回答的优势是它的奖励减去本组的平均，再除以本组的标准差；没有评论员（critic）。
+对照阅读见 docs/ppo_to_grpo.zh-CN.md。
+"""
+
+import copy
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+import checkpoints
+import cli
+import report
+import runlog
+
+SCRIPT = "grpo_addition"  # names its run folders; saved in its models (it loads no other's)
+VOCAB = "0123456789+=."  # "." ends an answer; after it, padding
+STOI = {ch: i for i, ch in enumerate(VOCAB)}
+
+
+def encode(text):
+    return [STOI[ch] for ch in text]
+
+
+def decode(ids):
+    return "".join(VOCAB[i] for i in ids)
+
+
+# ==== The model: a tiny GPT ===============================================================
+
+
+class Block(nn.Module):
+    """Pre-norm transformer block: causal self-attention, then an MLP, each a residual."""
+
+    def __init__(self, d, heads):
+        super().__init__()
+        self.ln1, self.ln2 = nn.LayerNorm(d), nn.LayerNorm(d)
+        self.qkv, self.proj, self.heads = nn.Linear(d, 3 * d), nn.Linear(d, d), heads
+        self.mlp = nn.Sequential(nn.Linear(d, 4 * d), nn.GELU(), nn.Linear(4 * d, d))
+
+    def forward(self, x):
+        B, T, d = x.shape
+        q, k, v = self.qkv(self.ln1(x)).split(d, dim=-1)
+        q, k, v = (z.view(B, T, self.heads, d // self.heads).transpose(1, 2) for z in (q, k, v))
+        y = F.scaled_dot_product_attention(q, k, v, is_causal=True)  # each token sees its past
+        x = x + self.proj(y.transpose(1, 2).reshape(B, T, d))
+        return x + self.mlp(self.ln2(x))
+
+
+class TinyGPT(nn.Module):
+    """pi(next token | tokens so far): token and position embeddings, blocks, logits."""
+
+    def __init__(self, n_layer, d, heads, block_size):
+        super().__init__()
+        self.tok, self.pos = nn.Embedding(len(VOCAB), d), nn.Embedding(block_size, d)
+        self.blocks = nn.Sequential(*[Block(d, heads) for _ in range(n_layer)])
+        self.ln, self.head = nn.LayerNorm(d), nn.Linear(d, len(VOCAB))
+
+    def forward(self, idx):  # (B, T) token ids -> (B, T, vocab) logits of the next token
+        x = self.tok(idx) + self.pos(torch.arange(idx.shape[1], device=idx.device))
+        return self.head(self.ln(self.blocks(x)))
+
+
+# ==== Hyperparameters =====================================================================
+
+
+@dataclass
+class Config(cli.OutputFlags):
+    """The task's and the algorithm's settings; the flags every script shares (--run-dir,
+    --eval, --threads, ...) come from cli.OutputFlags."""
+    seed: int = 0
+    """seeds torch and the data: same seed, same machine => same progress.csv"""
+    digits: int = 3
+    """digits of each number to add (3: 147+238=0385.); with 3, a million sums: the model
+    cannot learn them by heart, it has to learn to add"""
+    label_noise: float = 0.5
+    """share of the supervised examples whose label drops the carry out of the ones digit
+    (147+238=0375.), where there is one"""
+    # --- the model ---
+    n_layer: int = 2
+    """transformer blocks"""
+    d_model: int = 64
+    """width of the embeddings"""
+    n_head: int = 4
+    """attention heads"""
+    # --- supervised phase ---
+    sft_steps: int = 3000
+    """steps of supervised learning (cross-entropy on the answer tokens)"""
+    sft_batch: int = 128
+    """examples per supervised step"""
+    sft_lr: float = 1e-3
+    """Adam step size of the supervised phase"""
+    # --- GRPO ---
+    grpo_steps: int = 300
+    """GRPO updates, each on a fresh batch of prompts"""
+    prompts: int = 32
+    """prompts per GRPO step (B)"""
+    group_size: int = 8
+    """completions sampled per prompt (G)"""
+    update_epochs: int = 2
+    """gradient steps on each batch of completions (DeepSeekMath's mu)"""
+    learning_rate: float = 3e-4
+    """Adam step size of the GRPO phase"""
+    clip_coef: float = 0.2
+    """epsilon of the per-token clipped ratio, as in PPO-clip"""
+    beta: float = 0.04
+    """weight of the KL penalty to the supervised model (DeepSeekMath: 0.04)"""
+    scale_rewards: bool = True
+    """divide each advantage by its group's std (GRPO); --no-scale-rewards: Dr. GRPO's choice"""
+    length_norm: bool = True
+    """average each completion's token losses over its own length (GRPO); --no-length-norm:
+    over the longest possible completion, the same for all (Dr. GRPO, Liu et al. 2025)"""
+    eval_prompts: int = 500
+    """held-out prompts for pass@1 and pass@G (G = group_size samples each)"""
+    eval_every: int = 250
+    """supervised steps between two held-out checks (GRPO: a tenth of it) on 100 prompts"""
+    control: bool = False
+    """no GRPO: keep supervising on the same data for as many steps as fit GRPO's time"""
+    control_steps: int = 2500
+    """--control: the extra supervised steps (about as long as GRPO's phase; docs/ppo_to_grpo.md)"""
+
+    def __post_init__(self):
+        super().__post_init__()
+        cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
+                         sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", grpo_steps=">= 0",
+                         prompts="> 0", group_size="> 1", update_epochs="> 0",
+                         learning_rate="> 0", clip_coef="> 0", beta=">= 0",
+                         eval_prompts="> 0", label_noise="[0, 1]", control_steps=">= 0",
+                         eval_every="> 0")
+        cli.check(self.eval_every >= 10, f"--eval-every must be at least 10, got {self.eval_every}")
+        cli.check(not (self.gif or self.watch), "--gif and --watch play an env, and this task "
+                  "has none: --eval prints the saved model's answers")
+        cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
+                  f"multiple of --n-head ({self.n_head})")
+
+
+# ==== The task: prompts, answers, the verifier ============================================
+
+
+def prompt_of(a, b, digits):
+    return f"{a:0{digits}d}+{b:0{digits}d}="
+
+
+def answer_of(a, b, digits, drop_carry=False):
+    """The sum, zero-padded to digits + 1, then "."; drop_carry: the carry out of the ones
+    digit forgotten (the supervised data's mistake)."""
+    total = a + b - (10 if drop_carry and a % 10 + b % 10 >= 10 else 0)
+    return f"{total:0{digits + 1}d}."
+
+
+def reward(prompt, completion, digits):
+    """The verifier: 1.0 if `completion` is the right answer to `prompt`, else 0.0."""
+    a, b = (int(x) for x in prompt[:-1].split("+"))
+    return float(completion == answer_of(a, b, digits))
+
+
+def split_pairs(digits, eval_prompts, rng):
+    """All (a, b) pairs, shuffled; the first eval_prompts held out, never trained on."""
+    n = 10 ** digits
+    pairs = [(a, b) for a in range(n) for b in range(n)]
+    order = rng.permutation(len(pairs))
+    pairs = [pairs[i] for i in order]
+    return pairs[eval_prompts:], pairs[:eval_prompts]
+
+
+# ==== Sampling and the losses =============================================================
+
+
+@torch.no_grad()
+def sample(model, prompts, n_new, generator):
+    """Complete each prompt (B, P) with n_new tokens drawn from pi; returns (B, P + n_new)."""
+    idx = prompts
+    for _ in range(n_new):
+        probs = torch.softmax(model(idx)[:, -1], dim=-1)
+        nxt = torch.multinomial(probs, 1, generator=generator)  # a ~ pi(.|s)
+        idx = torch.cat([idx, nxt], dim=1)
+    return idx
+
+
+def completion_mask(completions):
+    """1 for each completion token up to and including its first ".", 0 after (padding)."""
+    end = (completions == STOI["."]).int()
+    after_end = (end.cumsum(1) - end) > 0  # tokens after the first "."
+    return (~after_end).float()
+
+
+def token_logp(model, seqs, P):
+    """log pi(token | tokens before it) of each completion token (positions P..), (B, L)."""
+    logits = model(seqs[:, :-1])[:, P - 1:]
+    return torch.log_softmax(logits, -1).gather(-1, seqs[:, P:, None]).squeeze(-1)
+
+
+def group_advantages(rewards, G, scale):
+    """A_i = (r_i - mean of its group) / (std of its group)  (Shao et al. 2024, eq. 4 and
+    section 4.1.2, outcome supervision): the group's mean stands in for PPO's critic.
+    scale=False: r_i - mean alone (Dr. GRPO). A group whose rewards are all equal gives 0."""
+    r = rewards.view(-1, G)
+    adv = r - r.mean(1, keepdim=True)
+    if scale:
+        adv = adv / (r.std(1, keepdim=True) + 1e-4)
+    return adv.reshape(-1)
+
+
+def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
+    """The GRPO objective (Shao et al. 2024, eq. 3), negated, per token t of completion i:
+
+        r_t   = pi(o_t | q, o_<t) / pi_old(o_t | q, o_<t)
+        L_t   = min(r_t A_i, clip(r_t, 1 - eps, 1 + eps) A_i) - beta * D_t
+        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (k3: unbiased, never negative, eq. 4)
+
+    averaged over each completion's own tokens (mask), then over completions; with
+    length_norm=False, each completion's sum over the longest possible length (Dr. GRPO)."""
+    ratio = torch.exp(logp - logp_old)
+    surrogate = torch.min(ratio * adv[:, None],
+                          torch.clamp(ratio, 1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
+    log_ref_ratio = logp_ref - logp
+    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # k3, per token
+    per_token = (surrogate - cfg.beta * kl) * mask
+    length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
+    loss = -(per_token.sum(1) / length).mean()
+    with torch.no_grad():
+        n = mask.sum()
+        info = dict(kl=((kl * mask).sum() / n).item(),
+                    clipfrac=((((ratio - 1).abs() > cfg.clip_coef).float() * mask).sum() / n).item(),
+                    ratio=ratio[mask > 0].detach())
+    return loss, info
+
+
+def sft_loss(model, seqs, P):
+    """Cross-entropy of the answer tokens given the prompt (the prompt itself is not learned)."""
+    logits = model(seqs[:, :-1])[:, P - 1:]
+    return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), seqs[:, P:].reshape(-1))
+
+
+@torch.no_grad()
+def evaluate(model, pairs, cfg):
+    """pass@1 (the share of right samples) and pass@G (the share of prompts with at least one
+    right sample among G), over held-out prompts, sampling at temperature 1 from a generator
+    of its own (seeded with eval_seed: training's draws are not shifted)."""
+    P, L = 2 * cfg.digits + 2, cfg.digits + 2
+    prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in pairs])
+    generator = torch.Generator().manual_seed(cfg.eval_seed)
+    seqs = sample(model, prompts.repeat_interleave(cfg.group_size, 0), L, generator)
+    right = torch.tensor([reward(decode(s[:P]), decode(s[P:]), cfg.digits) for s in seqs.tolist()])
+    right = right.view(len(pairs), cfg.group_size)
+    return right.mean().item(), right.max(1).values.mean().item()
+
+
+def completions(model, cfg, n=6):
+    """G completions of each of the first n held-out prompts, "x" after a wrong one."""
+    _, held_out = split_pairs(cfg.digits, cfg.eval_prompts, np.random.default_rng(cfg.seed))
+    P, L, gen = 2 * cfg.digits + 2, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed)
+    lines = []
+    for a, b in held_out[:n]:
+        prompt = prompt_of(a, b, cfg.digits)
+        seqs = sample(model, torch.tensor([encode(prompt)] * cfg.group_size), L, gen).tolist()
+        lines.append(f"{prompt} " + " ".join(
+            decode(s[P:]) + ("" if reward(prompt, decode(s[P:]), cfg.digits) else "x")
+            for s in seqs))
+    return lines, held_out
+
+
+NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "length"), float("nan"))
+
+
+# ==== Training ============================================================================
+
+
+def train(cfg: Config):
+    """Supervise, then GRPO (or, with --control, supervise on). Returns a dict: run_dir,
+    before and after (held-out pass@1 and pass@G after each phase), interrupted."""
+    torch.manual_seed(cfg.seed)  # the model's init
+    torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
+    rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
+    train_pairs, held_out = split_pairs(cfg.digits, cfg.eval_prompts, rng)
+    P, L = 2 * cfg.digits + 2, cfg.digits + 2  # prompt and answer lengths, in tokens
+    model = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
+    # The run folder: progress.csv, a progress line with these numbers every print_every steps
+    run = runlog.UpdateLog(SCRIPT, cfg, task=f"addition{cfg.digits}", shown=dict(
+        loss=".4f", reward=".3f", flat_groups=".2f", kl=".4f", clipfrac=".3f", pass1=".3f"))
+    held = lambda n=len(held_out): evaluate(model, held_out[:n], cfg)  # noqa: E731
+    result = dict(run_dir=run.dir, before=None, after=None, samples={})
+
+    def supervised_batch():  # prompt + answer, the answer's carry dropped in label_noise of them
+        picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
+        noisy = rng.random(cfg.sft_batch) < cfg.label_noise
+        return torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)
+                                    + answer_of(*train_pairs[i], cfg.digits, drop))
+                             for i, drop in zip(picks, noisy)])
+
+    # Ctrl-C ends training; either way, model.pt is saved as training left it
+    with run.saving_model(dict(model=model)):
+        # --- supervised phase: imitate the labels, wrong ones included ---
+        opt, phase_start = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr), time.time()
+        for step in range(1, cfg.sft_steps + (cfg.control_steps if cfg.control else 0) + 1):
+            loss = sft_loss(model, supervised_batch(), P)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            run.global_step = step
+            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
+                run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]))
+            if step == cfg.sft_steps:
+                result["before"] = held()  # what GRPO (or the control) starts from
+                result["samples"]["before"] = completions(model, cfg)[0]
+                print(f"supervised: held-out pass@1 {result['before'][0]:.3f}, "
+                      f"pass@{cfg.group_size} {result['before'][1]:.3f} (phase supervised "
+                      f"took {time.time() - run.start_time:.0f} s)", flush=True)
+                phase_start = time.time()
+
+        # --- GRPO: sample a group per prompt, score it, push up the better completions ---
+        reference = copy.deepcopy(model).requires_grad_(False)  # pi_ref, frozen: the KL's anchor
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)
+        for step in range(1, (0 if cfg.control else cfg.grpo_steps) + 1):
+            picks = rng.integers(0, len(train_pairs), cfg.prompts)
+            prompts = torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)) for i in picks])
+            seqs = sample(model, prompts.repeat_interleave(cfg.group_size, 0), L, gen)  # pi_old
+            rewards = torch.tensor([reward(decode(s[:P]), decode(s[P:]), cfg.digits)
+                                    for s in seqs.tolist()])  # the verifier: (B * G,)
+            adv = group_advantages(rewards, cfg.group_size, cfg.scale_rewards)  # (B * G,)
+            mask = completion_mask(seqs[:, P:])  # the answer's tokens; the prompt is not learned
+            with torch.no_grad():  # pi_old and pi_ref of every completion token, (B * G, L)
+                logp_old, logp_ref = token_logp(model, seqs, P), token_logp(reference, seqs, P)
+            for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
+                loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv, mask,
+                                       cfg)
+                opt.zero_grad()
+                loss.backward()
+                opt.step()
+            run.global_step = cfg.sft_steps + step
+            flat = (rewards.view(-1, cfg.group_size).std(1) == 0).float().mean().item()
+            checked = step % (cfg.eval_every // 10) == 0
+            run.update(dict(loss=loss.item(), reward=rewards.mean().item(), flat_groups=flat,
+                            kl=info["kl"], clipfrac=info["clipfrac"],
+                            length=mask.sum(1).mean().item(),
+                            pass1=held(100)[0] if checked else float("nan"), ratio=info["ratio"]))
+        result["after"], result["samples"]["after"] = held(), completions(model, cfg)[0]
+        print(f"after {'more supervision' if cfg.control else 'GRPO'}: held-out pass@1 "
+              f"{result['after'][0]:.3f}, pass@{cfg.group_size} {result['after'][1]:.3f} (phase "
+              f"{'control' if cfg.control else 'grpo'} took {time.time() - phase_start:.0f} s)",
+              flush=True)
+    if not run.interrupted:  # curve.png and inside.png (--curves), TensorBoard (--tensorboard)
+        report.finish_grpo(run, result["samples"], cfg)
+    return dict(result, interrupted=run.interrupted)
+
+
+def main(argv=None):
+    """python grpo_addition.py [flags]: train, or --eval a saved model (its completions)."""
+    cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
+    with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        if not cfg.eval:
+            result = train(cfg)
+            if result["interrupted"]:
+                print(f"interrupted: {result['run_dir']} holds model.pt as training left it",
+                      flush=True)
+                raise SystemExit(130)
+            return
+        saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
+        run_cfg = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
+        model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda c: TinyGPT(
+            run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head, 3 * run_cfg.digits + 4))
+        lines, held_out = completions(model, run_cfg, n=8)
+        print("\n".join(lines), flush=True)
+        pass1, passG = evaluate(model, held_out, run_cfg)
+        print(f"held-out ({len(held_out)} prompts): pass@1 {pass1:.3f}, "
+              f"pass@{run_cfg.group_size} {passG:.3f}  (x: a wrong completion)", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,152 @@
+"""grpo_addition.py: the task and its verifier, the tokenizer, the group advantages, the GRPO
+loss against a hand-computed case, the masks, and short seeded runs."""
+
+import csv
+import math
+
+import pytest
+import torch
+
+import grpo_addition as grpo
+from conftest import run_script
+
+
+@pytest.mark.quick
+def test_tokenizer_round_trip_and_the_verifier():
+    text = grpo.prompt_of(147, 238, 3) + grpo.answer_of(147, 238, 3)
+    assert text == "147+238=0385." and grpo.decode(grpo.encode(text)) == text
+    assert grpo.answer_of(147, 238, 3, drop_carry=True) == "0375."  # the label's mistake
+    assert grpo.answer_of(141, 238, 3, drop_carry=True) == "0379."  # no carry: nothing to drop
+    assert grpo.reward("147+238=", "0385.", 3) == 1.0
+    assert grpo.reward("147+238=", "0375.", 3) == 0.0
+    assert grpo.reward("147+238=", "385..", 3) == 0.0  # the format is part of the answer
+
+
+@pytest.mark.quick
+def test_held_out_sums_are_never_trained_on():
+    import numpy as np
+
+    train, held = grpo.split_pairs(2, 100, np.random.default_rng(0))
+    assert len(held) == 100 and len(train) == 9900 and not set(train) & set(held)
+
+
+@pytest.mark.quick
+def test_group_advantages_by_hand():
+    """Two groups of G = 4: rewards (1, 0, 0, 1) -> mean 0.5, std (unbiased) 0.577;
+    (1, 1, 1, 1) -> all equal: no signal, advantage 0 whatever the scaling."""
+    r = torch.tensor([1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    std = math.sqrt(((0.5 ** 2) * 4) / 3)
+    scaled = grpo.group_advantages(r, 4, scale=True)
+    assert torch.allclose(scaled[:4], torch.tensor([0.5, -0.5, -0.5, 0.5]) / (std + 1e-4))
+    assert torch.equal(scaled[4:], torch.zeros(4))
+    assert torch.equal(grpo.group_advantages(r, 4, scale=False)[:4],
+                       torch.tensor([0.5, -0.5, -0.5, 0.5]))  # Dr. GRPO
+
+
+@pytest.mark.quick
+def test_completion_mask_ends_after_the_first_stop():
+    dot = grpo.STOI["."]
+    c = torch.tensor([[1, 2, dot, 3], [dot, 1, dot, 2], [1, 2, 3, 4]])
+    assert grpo.completion_mask(c).tolist() == [[1, 1, 1, 0], [1, 0, 0, 0], [1, 1, 1, 1]]
+
+
+def hand_case(length_norm):
+    """Two completions; the first 2 tokens long (then padding), the second 3.
+    logp - logp_old = ln 1.5 on every token (r = 1.5), logp_ref - logp = ln 2 (k3 = 2 - ln 2 - 1)."""
+    cfg = grpo.Config(clip_coef=0.2, beta=0.1, length_norm=length_norm)
+    logp = torch.zeros(2, 3, requires_grad=True)
+    logp_old = logp.detach() - math.log(1.5)
+    logp_ref = logp.detach() + math.log(2.0)
+    adv = torch.tensor([1.0, -1.0])
+    mask = torch.tensor([[1.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
+    return grpo.grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg), logp
+
+
+@pytest.mark.quick
+def test_grpo_loss_by_hand():
+    """Per token: A = +1 with r = 1.5 -> min(1.5, 1.2) = 1.2 (clipped); A = -1 -> min(-1.5,
+    -1.2) = -1.5. k3 = 2 - ln 2 - 1 = 0.30685 per token, times beta = 0.1. GRPO averages each
+    completion over its own tokens: (1.2 - 0.030685) and (-1.5 - 0.030685); the loss is minus
+    their mean. Dr. GRPO sums each over the longest length, 3: (2 * 1.169315) / 3 and
+    (3 * -1.530685) / 3."""
+    k3 = 2 - math.log(2) - 1
+    (loss, info), logp = hand_case(length_norm=True)
+    assert loss.item() == pytest.approx(-((1.2 - 0.1 * k3) + (-1.5 - 0.1 * k3)) / 2, rel=1e-5)
+    assert info["kl"] == pytest.approx(k3, rel=1e-5)  # over the 5 real tokens
+    assert info["clipfrac"] == pytest.approx(1.0)  # every ratio is outside [0.8, 1.2]
+    loss.backward()
+    assert torch.all(logp.grad[0, :2] != 0) and logp.grad[0, 2] == 0  # padding: no gradient
+    (loss, _), _ = hand_case(length_norm=False)
+    assert loss.item() == pytest.approx(-(2 * (1.2 - 0.1 * k3) / 3 + 3 * (-1.5 - 0.1 * k3) / 3) / 2,
+                                        rel=1e-5)
+
+
+@pytest.mark.quick
+def test_token_logp_reads_the_completion_tokens_only():
+    torch.manual_seed(0)
+    model = grpo.TinyGPT(1, 16, 2, 8)
+    seqs = torch.tensor([grpo.encode("12+34=046.")[:8]])
+    P = 6  # "12+34=" : the first completion token is seqs[0, 6]
+    logp = grpo.token_logp(model, seqs, P)
+    full = torch.log_softmax(model(seqs[:, :-1]), -1)
+    assert logp.shape == (1, 2)
+    assert logp[0, 0].item() == pytest.approx(full[0, P - 1, seqs[0, P]].item())
+
+
+SMALL = ["--digits", 2, "--sft-steps", 300, "--grpo-steps", 40, "--eval-every", 100,
+         "--eval-prompts", 100, "--n-layer", 1, "--d-model", 32]
+
+
+@pytest.mark.quick
+def test_a_tiny_run_in_process(tmp_path):
+    """The quick layer's run: one-digit sums, a few steps; the result names both phases."""
+    result = grpo.train(grpo.Config(digits=1, sft_steps=30, grpo_steps=10, eval_every=10,
+                                    eval_prompts=10, n_layer=1, d_model=16, curves=False,
+                                    print_every=10**6, run_dir=str(tmp_path)))
+    assert 0 <= result["before"][0] <= result["before"][1] <= 1 and result["after"] is not None
+    assert (result["run_dir"] / "model.pt").exists()
+
+
+def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
+    p = run_script("grpo_addition.py", *SMALL, "--run-dir", tmp_path, timeout=120)
+    assert p.returncode == 0, p.stderr
+    (run,) = tmp_path.iterdir()
+    assert {f.name for f in run.iterdir()} >= {"progress.csv", "model.pt", "curve.png", "inside.png"}
+    rows = [r for r in csv.DictReader(open(run / "progress.csv")) if r["reward"] != "nan"]
+    assert len(rows) == 40
+    first, last = (sum(float(r["reward"]) for r in part) / 10 for part in (rows[:10], rows[-10:]))
+    assert last > first, (first, last)
+    p = run_script("grpo_addition.py", "--eval", run, timeout=120)
+    assert p.returncode == 0 and "held-out (100 prompts): pass@1" in p.stdout, p.stderr
+
+
+def test_same_seed_same_log(tmp_path):
+    args = ["--digits", 1, "--sft-steps", 30, "--grpo-steps", 10, "--eval-every", 10,
+            "--eval-prompts", 10, "--n-layer", 1, "--d-model", 16, "--no-curves"]
+    logs = []
+    for i in range(2):
+        p = run_script("grpo_addition.py", *args, "--run-dir", tmp_path / str(i), timeout=120)
+        assert p.returncode == 0, p.stderr
+        (run,) = (tmp_path / str(i)).iterdir()
+        logs.append((run / "progress.csv").read_text())
+    assert logs[0] == logs[1]
+
+
+@pytest.mark.parametrize("args,needle", [(["--group-size", "1"], "--group-size must be > 1"),
+                                         (["--d-model", "30"], "multiple of --n-head"),
+                                         (["--label-noise", "2"], "--label-noise must be in [0, 1]")])
+def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
+    p = run_script("grpo_addition.py", *args, "--run-dir", tmp_path, timeout=60)
+    assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_keeps_the_model(tmp_path):
+    from conftest import interrupt
+
+    code, out, err = interrupt("grpo_addition.py", *SMALL, "--grpo-steps", 100000,
+                               "--print-every", 1, "--run-dir", tmp_path, after="step     30")
+    assert code == 130, err
+    (run,) = tmp_path.iterdir()
+    assert (run / "model.pt").exists() and not list(run.glob("*.tmp"))
+    assert "model.pt as training left it" in out
