@@ -1,12 +1,13 @@
 """GRPO on a tiny transformer that learns to add (Shao et al. 2024, "DeepSeekMath", section 4:
 Group Relative Policy Optimization).
 
-Read after ppo_cartpole.py: the same PPO-clip ratio and the same KL penalty as
-ppo_kl_cartpole.py, on a language model. A state is the prompt and the tokens written so
-far, an action the next token, an episode one completion, the reward 1 if a program finds
-the sum right. docs/ppo_to_grpo.md maps each piece to its PPO line. The run, top to bottom:
+Read after ppo_cartpole.py: the same PPO-clip ratio, per token, on a language model, and a
+KL penalty as in ppo_kl_cartpole.py, but to the frozen supervised model. A state is the
+prompt and the tokens written so far, an action the next token, an episode one completion,
+the reward 1 if a program finds the sum right. docs/ppo_to_grpo.md maps each piece to its
+PPO line. The run, top to bottom:
 
-    supervise  a tiny character-level transformer on sums like "47+38=085.", a share of
+    supervise  a tiny character-level transformer on sums like "147+238=0385.", a share of
                whose labels drop the carry (supervised data that is wrong sometimes)
     sample     G completions of each of B prompts from pi_old, the policy as it is now
     reward     1 if a completion is the right sum, else 0: a verifier, no better labels
@@ -124,8 +125,9 @@ class Config(cli.OutputFlags):
     """completions sampled per prompt (G)"""
     update_epochs: int = 2
     """gradient steps on each batch of completions (DeepSeekMath's mu)"""
-    learning_rate: float = 3e-4
-    """Adam step size of the GRPO phase"""
+    learning_rate: float = 1e-4
+    """Adam step size of the GRPO phase (3e-4: seed 1 of 5 collapsed, the KL jumping to 2 in
+    a few steps; docs/ppo_to_grpo.md)"""
     clip_coef: float = 0.2
     """epsilon of the per-token clipped ratio, as in PPO-clip"""
     beta: float = 0.04
@@ -203,22 +205,27 @@ def sample(model, prompts, n_new, generator):
 
 
 def completion_mask(completions):
-    """1 for each completion token up to and including its first ".", 0 after (padding)."""
+    """1 for each completion token up to and including its first ".", 0 for the tokens
+    sampled after it (padding: not part of the answer). "12.4." -> 1 1 1 0 0."""
     end = (completions == STOI["."]).int()
     after_end = (end.cumsum(1) - end) > 0  # tokens after the first "."
     return (~after_end).float()
 
 
 def token_logp(model, seqs, P):
-    """log pi(token | tokens before it) of each completion token (positions P..), (B, L)."""
+    """log pi(token | tokens before it) of each completion token (positions P..), (B, L).
+    The logits at position t predict token t + 1: the input drops the last token, and the
+    output starts at P - 1, so the prompt's own tokens are never scored (never learned)."""
     logits = model(seqs[:, :-1])[:, P - 1:]
     return torch.log_softmax(logits, -1).gather(-1, seqs[:, P:, None]).squeeze(-1)
 
 
 def group_advantages(rewards, G, scale):
-    """A_i = (r_i - mean of its group) / (std of its group)  (Shao et al. 2024, eq. 4 and
-    section 4.1.2, outcome supervision): the group's mean stands in for PPO's critic.
-    scale=False: r_i - mean alone (Dr. GRPO). A group whose rewards are all equal gives 0."""
+    """A_i = (r_i - mean of its group) / (std of its group)  (Shao et al. 2024, section 4.1.2,
+    outcome supervision): the group's mean stands in for PPO's critic. E.g. G = 8, two
+    right: +1.62 for them, -0.54 for the others. scale=False: r_i - mean alone (Dr. GRPO).
+    A group whose rewards are all equal gives 0. The rewards come prompt by prompt, G each
+    (repeat_interleave), so each row of the view is one prompt's group."""
     r = rewards.view(-1, G)
     adv = r - r.mean(1, keepdim=True)
     if scale:
@@ -231,15 +238,19 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
 
         r_t   = pi(o_t | q, o_<t) / pi_old(o_t | q, o_<t)
         L_t   = min(r_t A_i, clip(r_t, 1 - eps, 1 + eps) A_i) - beta * D_t
-        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (k3: unbiased, never negative, eq. 4)
+        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (eq. 4; k3, never negative)
 
-    averaged over each completion's own tokens (mask), then over completions; with
-    length_norm=False, each completion's sum over the longest possible length (Dr. GRPO)."""
+    D_t estimates KL(pi || pi_ref) from the sampled token (unbiased where it was drawn from
+    pi: in the first epoch), the direction opposite to ppo_kl_cartpole.py's KL(pi_old || pi);
+    its form is ppo_cartpole.py's approx_kl, (r - 1) - log r, with pi_ref / pi for r.
+    Averaged over each completion's own tokens (mask), then over completions; with
+    length_norm=False, each completion's sum over the longest possible length (Dr. GRPO).
+    The logged kl, clipfrac and ratio are the last epoch's, before its step."""
     ratio = torch.exp(logp - logp_old)
     surrogate = torch.min(ratio * adv[:, None],
                           torch.clamp(ratio, 1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
     log_ref_ratio = logp_ref - logp
-    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # k3, per token
+    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # k3 of KL(pi || pi_ref), per token
     per_token = (surrogate - cfg.beta * kl) * mask
     length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
     loss = -(per_token.sum(1) / length).mean()
@@ -383,7 +394,8 @@ def main(argv=None):
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
         run_cfg = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
         model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda c: TinyGPT(
-            run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head, 3 * run_cfg.digits + 4))
+            run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head,
+            (2 * run_cfg.digits + 2) + (run_cfg.digits + 2)))  # prompt + answer tokens
         lines, held_out = completions(model, run_cfg, n=8)
         print("\n".join(lines), flush=True)
         pass1, passG = evaluate(model, held_out, run_cfg)
