@@ -48,7 +48,7 @@ def load_checkpoint(path, required=(), script=None):
         raise UserError(f"{path} is not a model of {script}.py: it is " + (
             f"a model of {ckpt['script']}.py" if "script" in ckpt else
             "from an older version that did not record its script: train it again"))
-    if isinstance(ckpt, dict) and "buffer" in ckpt and not set(required) <= set(ckpt):
+    if isinstance(ckpt, dict) and "buffer" in ckpt and "buffer" not in required:
         raise UserError(f"{path} is the run's checkpoint, for --resume {path.parent}; --eval "
                         "plays model.pt or best.pt (or the run folder)")
     if not isinstance(ckpt, dict) or not set(required) <= set(ckpt):
@@ -86,7 +86,7 @@ def config_to_resume(cfg, script):
     """The Config of the run cfg.resume, as saved, with the flags of MAY_CHANGE_ON_RESUME that
     this command set. A learning setting set to something else than the saved run's is refused."""
     path = Path(cfg.resume) / "checkpoint.pt"
-    saved = load_checkpoint(path, required=("config", "global_step"), script=script)
+    saved = load_checkpoint(path, required=("config", "global_step", "buffer"), script=script)
     defaults = {f.name: f.default for f in dataclasses.fields(cfg)}
     kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}
     for name, value in asdict(cfg).items():
