@@ -272,20 +272,29 @@ def draw_grpo(run, samples, cfg):
     steps. inside.png: the per-token ratio pi / pi_old at three GRPO updates against the
     clip band, and held-out prompts' completions before and after GRPO (x: wrong)."""
     plt, log = plots.pyplot(), plots.read_csv(run.dir / "progress.csv")
-    x, grpo = log["global_step"], np.isfinite(log["reward"])
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
-    top.plot(x[grpo], log["reward"][grpo], color="C0", lw=0.8, label="reward of the samples")
-    checked = np.isfinite(log["pass1"])
-    top.plot(x[checked], log["pass1"][checked], "o-", color="C3", ms=3, label="held-out pass@1")
-    bottom.plot(x[grpo], log["kl"][grpo], color="C4", lw=0.8, label="KL(pi || pi_ref), k3")
-    bottom.plot(x[grpo], log["flat_groups"][grpo], color="C7", lw=0.8,
-                label="groups with equal rewards (no signal)")
-    for ax in (top, bottom):
-        ax.axvline(cfg.sft_steps, color="gray", ls=":", lw=1)
-        ax.legend(fontsize=8)
-    top.set_title(f"{run.dir.name}\nsupervised until the dotted line, then "
-                  f"{'more supervision' if cfg.control else 'GRPO'}", fontsize=8)
-    bottom.set_xlabel("step")
+    x, checked = log["global_step"], np.isfinite(log["pass1"])
+    fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), gridspec_kw=dict(width_ratios=[1, 2]))
+    second = "more supervision" if cfg.control else "GRPO"
+    for column, (phase, steps) in enumerate((("supervised", x <= cfg.sft_steps),
+                                             (second, x > cfg.sft_steps))):
+        top, bottom = axes[:, column]  # each phase on its own step axis: GRPO's is shorter
+        if not cfg.control and column == 1:
+            top.plot(x[steps], log["reward"][steps], color="C0", lw=0.8,
+                     label="reward of the samples")
+            bottom.plot(x[steps], log["kl"][steps], color="C4", lw=0.8,
+                        label="KL(pi || pi_ref), k3")
+            bottom.plot(x[steps], log["flat_groups"][steps], color="C7", lw=0.8,
+                        label="groups with equal rewards (no signal)")
+        else:
+            bottom.plot(x[steps & checked], log["loss"][steps & checked], color="C1", lw=1,
+                        label="cross-entropy")
+        top.plot(x[steps & checked], log["pass1"][steps & checked], "o-", color="C3", ms=3,
+                 label="held-out pass@1 (100 sums)")
+        top.set_title(phase, fontsize=9)
+        bottom.set_xlabel("step")
+        for ax in (top, bottom):
+            ax.legend(fontsize=7)
+    fig.suptitle(run.dir.name, fontsize=8)
     fig.tight_layout()
     print(f"curve: {plots.save_whole(plt, fig, run.dir / 'curve.png', dpi=90)}", flush=True)
     fig = plt.figure(figsize=(12, 8))
