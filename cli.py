@@ -11,7 +11,6 @@ import ast
 import contextlib
 import dataclasses
 import inspect
-import signal
 import sys
 import textwrap
 from dataclasses import dataclass
