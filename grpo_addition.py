@@ -282,9 +282,8 @@ def evaluate(model, pairs, cfg):
     return right.mean().item(), right.max(1).values.mean().item()
 
 
-def completions(model, cfg, n=6):
+def completions(model, cfg, held_out, n=6):
     """G completions of each of the first n held-out prompts, "x" after a wrong one."""
-    _, held_out = split_pairs(cfg.digits, cfg.eval_prompts, np.random.default_rng(cfg.seed))
     P, L, gen = 2 * cfg.digits + 2, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed)
     lines = []
     for a, b in held_out[:n]:
@@ -293,7 +292,7 @@ def completions(model, cfg, n=6):
         lines.append(f"{prompt} " + " ".join(
             decode(s[P:]) + ("" if reward(prompt, decode(s[P:]), cfg.digits) else "x")
             for s in seqs))
-    return lines, held_out
+    return lines
 
 
 NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "length"), float("nan"))
@@ -338,7 +337,7 @@ def train(cfg: Config):
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]))
             if step == cfg.sft_steps:
                 result["before"] = held()  # what GRPO (or the control) starts from
-                result["samples"]["before"] = completions(model, cfg)[0]
+                result["samples"]["before"] = completions(model, cfg, held_out)
                 print(f"supervised: held-out pass@1 {result['before'][0]:.3f}, "
                       f"pass@{cfg.group_size} {result['before'][1]:.3f} (phase supervised "
                       f"took {time.time() - run.start_time:.0f} s)", flush=True)
@@ -370,7 +369,7 @@ def train(cfg: Config):
                             kl=info["kl"], clipfrac=info["clipfrac"],
                             length=mask.sum(1).mean().item(),
                             pass1=held(100)[0] if checked else float("nan"), ratio=info["ratio"]))
-        result["after"], result["samples"]["after"] = held(), completions(model, cfg)[0]
+        result["after"], result["samples"]["after"] = held(), completions(model, cfg, held_out)
         print(f"after {'more supervision' if cfg.control else 'GRPO'}: held-out pass@1 "
               f"{result['after'][0]:.3f}, pass@{cfg.group_size} {result['after'][1]:.3f} (phase "
               f"{'control' if cfg.control else 'grpo'} took {time.time() - phase_start:.0f} s)",
@@ -396,7 +395,9 @@ def main(argv=None):
         model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda c: TinyGPT(
             run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head,
             (2 * run_cfg.digits + 2) + (run_cfg.digits + 2)))  # prompt + answer tokens
-        lines, held_out = completions(model, run_cfg, n=8)
+        _, held_out = split_pairs(run_cfg.digits, run_cfg.eval_prompts,
+                                  np.random.default_rng(run_cfg.seed))  # the run's own split
+        lines = completions(model, run_cfg, held_out, n=8)
         print("\n".join(lines), flush=True)
         pass1, passG = evaluate(model, held_out, run_cfg)
         print(f"held-out ({len(held_out)} prompts): pass@1 {pass1:.3f}, "
