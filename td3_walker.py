@@ -238,13 +238,13 @@ def update_critics(nets, batch, half_width, low, high, cfg):
     """One step of both critics on a minibatch toward the clipped double-Q target."""
     obs, action, reward, next_obs, not_done = batch
     with torch.no_grad():  # targets are constants: no gradient flows into them
-        # Fix 3, target policy smoothing: a~ = clip(mu'(s') + clip(eps, -c, c), low, high),
-        # eps ~ N(0, sigma)  (Fujimoto et al. 2018, section 5.3 and Algorithm 1)
+        # Fix 3, target policy smoothing: a~ = mu'(s') + clip(eps, -c, c), eps ~ N(0, sigma)
+        # (Fujimoto et al. 2018, section 5.3); the clip into the action box: the authors' code
         eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
         next_action = (nets["actor_target"](next_obs) + half_width * eps).clamp(low, high)
         y = td_target(reward, not_done, nets["critic_target"](next_obs, next_action),
                       nets["critic2_target"](next_obs, next_action), cfg.gamma)
-    # L = mean (y - Q1(s, a))^2 + mean (y - Q2(s, a))^2: both critics learn the same target
+    # L = mean (y - Q1(s, a))^2 + mean (y - Q2(s, a))^2, one y for both (~2 x DDPG's loss)
     critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
                    + F.mse_loss(nets["critic2"](obs, action), y))
     nets["critic_opt"].zero_grad()
@@ -351,10 +351,10 @@ def train(cfg: Config):
             if learning:
                 batch = buffer.sample(cfg.batch_size)
                 critic_loss = update_critics(nets, batch, half_width, low_t, high_t, cfg)
-                if global_step % cfg.policy_delay == 0:  # (one critic update per env step)
+                if global_step % cfg.policy_delay == 0:  # t: env steps = critic updates
                     actor_loss = update_actor_and_targets(nets, batch[0], cfg)  # [0]: states
                 losses = (critic_loss, actor_loss)
-            run.progress(global_step, losses, (nets["actor"], nets["critic"]))  # nan/inf: stop
+            run.progress(global_step, losses, (nets["actor"], nets["critic"], nets["critic2"]))
 
             # --- evaluate: mu(s) without noise, every eval_every steps (tutorial 003); during
             # the random warm-up only the first time, as the untrained baseline ---
