@@ -16,6 +16,32 @@ def run_script(script, *args, timeout=300, cwd=None, env=None):
                           preexec_fn=ctrl_c_default)
 
 
+def run_main(script, *args, capsys):
+    """`python <script> args...` in this process: the script's main(args), as its __main__
+    block calls it, with no display; returns what run_script does (returncode, stdout,
+    stderr). For what main() does with its flags (the one-line errors): no new interpreter
+    each time (importing torch alone takes over a second). What needs a process of its own
+    (a signal, a warning printed to stderr, too large an allocation) uses run_script."""
+    import importlib
+    import types
+
+    module = importlib.import_module(Path(script).stem)
+    environ, argv0 = dict(os.environ), sys.argv[0]
+    for name in ("DISPLAY", "WAYLAND_DISPLAY"):
+        os.environ.pop(name, None)
+    sys.argv[0], code = script, 0  # argparse's prog, as on the command line
+    try:
+        module.main([str(a) for a in args])
+    except SystemExit as e:
+        code = e.code if isinstance(e.code, int) else int(e.code is not None)
+    finally:
+        os.environ.clear()
+        os.environ.update(environ)
+        sys.argv[0] = argv0
+    out, err = capsys.readouterr()
+    return types.SimpleNamespace(returncode=code, stdout=out, stderr=err)
+
+
 def ctrl_c_default():
     """In the child: Ctrl-C (SIGINT) does what it does in a terminal. A shell that starts a
     job in the background (`cmd &`) makes its children ignore SIGINT, tests included."""
@@ -58,8 +84,17 @@ def no_mujoco_log_left():
         log.unlink(missing_ok=True)
 
 
+# Files whose tests each start a training run of several seconds or more.
+HEAVY = ("test_experiments.py", "test_ddpg_walker.py", "test_td3_walker.py",
+         "test_grpo_addition.py", "test_exercises.py")
+
+
 def pytest_collection_modifyitems(items):
-    """The worked examples in common.py's docstrings are part of the quick layer."""
+    """The worked examples in common.py's docstrings are part of the quick layer. The longest
+    tests go first: pytest-xdist hands tests out one at a time (--maxschedchunk 1, pytest.ini),
+    so the workers, busy with the long ones from the start, end together."""
     for item in items:
         if isinstance(item, pytest.DoctestItem):
             item.add_marker(pytest.mark.quick)
+    items.sort(key=lambda item: (item.get_closest_marker("slow") is None,
+                                 item.path.name not in HEAVY))

@@ -17,7 +17,7 @@ import checkpoints
 import report
 import runlog
 from common import UserError
-from conftest import ROOT, interrupt, run_script
+from conftest import ROOT, interrupt, run_main, run_script
 
 
 def play(path, episodes):
@@ -442,13 +442,16 @@ def test_same_seed_same_evaluations(tmp_path):
     (["--gif", "{tmp}/x.gif"], "it needs --eval"),
     (["--env-id", "Pendulum-v1"], "is not a MuJoCo env"),
 ])
-def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle, capsys):
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"not a checkpoint")
     args = [a.format(tmp=tmp_path, file=bad) for a in args]
     if "--total-timesteps" not in args:  # small budgets, so that a valid run would be short
         args += ["--total-timesteps", "300"] + ([] if "--start-steps" in args else ["--start-steps", "256"])
-    p = run_script("ddpg_walker.py", *args, "--run-dir", tmp_path, timeout=120)
+    if needle in ("not enough memory", "unknown environment"):  # as a user runs it
+        p = run_script("ddpg_walker.py", *args, "--run-dir", tmp_path, timeout=120)
+    else:  # in this process (conftest.run_main)
+        p = run_main("ddpg_walker.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert sorted(tmp_path.iterdir()) == [bad]  # no run folder left behind

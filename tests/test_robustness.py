@@ -13,7 +13,7 @@ import imageio.v3 as iio
 import pytest
 import torch
 
-from conftest import ROOT, interrupt, run_script
+from conftest import ROOT, interrupt, run_main, run_script
 
 CARTPOLE = ["ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole"]
 QUICK = ["--total-timesteps", 512, "--no-stop-when-solved", "--eval-episodes", 1,
@@ -156,8 +156,8 @@ def test_interrupted_run_draws_its_curve_and_says_where_it_is(script, tmp_path):
     ("ddpg_walker", ["--gamma", "nan"], "--gamma must be a finite number"),
     ("ddpg_walker", ["--eval", "a.pt", "--resume", "b"], "--resume"),
 ])
-def test_bad_flags_are_one_line_and_exit_2(script, args, needle, tmp_path):
-    p = run_script(f"{script}.py", *args, "--run-dir", tmp_path, timeout=120)
+def test_bad_flags_are_one_line_and_exit_2(script, args, needle, tmp_path, capsys):
+    p = run_main(f"{script}.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert one_line(p.stderr, needle), p.stderr
     assert list(tmp_path.iterdir()) == []
@@ -168,8 +168,8 @@ def test_bad_flags_are_one_line_and_exit_2(script, args, needle, tmp_path):
     ("ppo_cartpole", ["--reward-scale", "1e30"], "nan or inf in loss_v"),
 ])
 def test_a_run_that_diverges_stops_in_one_line_without_a_run_folder(script, args, needle,
-                                                                    tmp_path):
-    p = run_script(f"{script}.py", *args, "--run-dir", tmp_path, *QUICK, timeout=300)
+                                                                    tmp_path, capsys):
+    p = run_main(f"{script}.py", *args, "--run-dir", tmp_path, *QUICK, capsys=capsys)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert one_line(p.stderr, needle) and "learning rate" in p.stderr, p.stderr
     assert list(tmp_path.iterdir()) == []
@@ -191,11 +191,11 @@ def models(tmp_path_factory):
 @pytest.mark.parametrize("script,other", [("ppo_kl_cartpole", "ppo_cartpole"),
                                           ("actor_critic_cartpole", "ppo_kl_cartpole"),
                                           ("ppo_cartpole", "actor_critic_cartpole")])
-def test_eval_refuses_another_scripts_model(script, other, models):
-    p = run_script(f"{script}.py", "--eval", models[other], timeout=120)
+def test_eval_refuses_another_scripts_model(script, other, models, capsys):
+    p = run_main(f"{script}.py", "--eval", models[other], capsys=capsys)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert one_line(p.stderr, f"is not a model of {script}.py: it is a model of {other}.py")
-    ok = run_script(f"{other}.py", "--eval", models[other], "--eval-episodes", 1, timeout=120)
+    ok = run_main(f"{other}.py", "--eval", models[other], "--eval-episodes", 1, capsys=capsys)
     assert ok.returncode == 0, ok.stderr
 
 

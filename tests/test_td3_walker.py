@@ -9,7 +9,7 @@ import pytest
 import torch
 
 import td3_walker as td3
-from conftest import ROOT, interrupt, run_script
+from conftest import ROOT, interrupt, run_main, run_script
 from test_ddpg_walker import PENDULUM, pendulum_flags
 
 
@@ -93,8 +93,8 @@ def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
     (["--target-noise", "-1"], "--target-noise must be >= 0"),
     (["--env-id", "CartPole-v1"], "is not a MuJoCo env"),
 ])
-def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle):
-    p = run_script("td3_walker.py", *args, "--run-dir", tmp_path, timeout=120)
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle, capsys):
+    p = run_main("td3_walker.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2, (p.stdout, p.stderr)
     assert needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert not list(tmp_path.iterdir())
