@@ -62,6 +62,7 @@ def draw_q_against_return(path, upto=200_000):
         ax.axvspan(0, 25_000, color="gray", alpha=0.12, label="random warm-up")
         ax.legend(fontsize=7, loc="upper left")
         ax.set_title(f"{name}, Walker2d-v5, seed 0, the first {upto:,} steps", fontsize=9)
+    axes[0].set_ylabel("mean over the states of\nthe evaluation episodes", fontsize=8)
     fig.tight_layout()
     return plots.save_whole(plt, fig, path, dpi=80)
 
