@@ -60,8 +60,30 @@ def save_every_evaluation(curves, path):
                                      f"{qi:.6g}", f"{gi:.6g}", f"{qi - gi:.6g}"])
 
 
+def draw_gap(curves, path):
+    """The gap itself, Q(s, mu(s)) minus the discounted return obtained, per variant: the median
+    over the seeds and their band (min to max), from the first learned evaluation on."""
+    plt = lab.plots.pyplot()
+    fig, ax = plt.subplots(figsize=(10, 3.4))
+    for color, (variant, runs) in enumerate(curves.items()):
+        gaps = []
+        for _, _, kept in runs:
+            (steps, q), (_, g) = kept["q_estimate"], kept["discounted_return"]
+            after = steps > SETTINGS["start_steps"]  # the warm-up's untrained critic: left out
+            gaps.append((steps[after], (q - g)[after]))
+        lab.band(ax, gaps, color, f"{variant} (median of {len(runs)} seeds; band: min to max)")
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_ylabel("Q(s, mu(s)) - discounted return", fontsize=8)
+    ax.set_xlabel("env steps")
+    ax.set_title("td3_fixes: the critic's estimate minus what mu obtained (> 0: over)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1))
+    fig.tight_layout()
+    return lab.plots.save_whole(plt, fig, path, dpi=80)
+
+
 if __name__ == "__main__":
     curves = lab.main("td3_fixes", td3_walker, VARIANTS, budget=50_000, solved=1000.0,
                       what="evaluation return (no noise)", quick_budget=2500, panels=PANELS,
                       quick_settings=dict(start_steps=1000, eval_every=2500), **SETTINGS)
     save_every_evaluation(curves, lab.OUT / "td3_fixes_evaluations.csv")
+    print(f"the gap: {draw_gap(curves, lab.OUT / 'td3_fixes_gap.png')}")
