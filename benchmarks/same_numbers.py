@@ -39,6 +39,12 @@ CASES = {
     # Walker2d past the 25k-step warm-up: 5000 steps of learning, evaluated at 5k and 30k
     "ddpg_walker_walker2d": ("ddpg_walker.py", [
         "--total-timesteps", "30000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
+    # TD3 the same way: its 1M runs go on from a frozen commit, valid while these stay SAME
+    "td3_walker_pendulum": ("td3_walker.py", [
+        "--env-id", "InvertedPendulum-v5", "--total-timesteps", "3000", "--start-steps", "1000",
+        "--eval-every", "1000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
+    "td3_walker_walker2d": ("td3_walker.py", [
+        "--total-timesteps", "30000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
 }
 
 
