@@ -16,6 +16,11 @@ def run_script(script, *args, timeout=300, cwd=None, env=None):
                           preexec_fn=ctrl_c_default)
 
 
+# The bad inputs whose tests run the real command, each in a new process: the allocation that
+# fails, and an env that gymnasium cannot make (where a package's warning would show).
+IN_A_PROCESS = ("not enough memory", "unknown environment")
+
+
 def run_main(script, *args, capsys):
     """`python <script> args...` in this process: the script's main(args), as its __main__
     block calls it, with no display; returns what run_script does (returncode, stdout,

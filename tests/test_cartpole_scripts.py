@@ -11,7 +11,7 @@ import torch
 import checkpoints
 import report
 
-from conftest import ROOT, ctrl_c_default, interrupt, run_main, run_script
+from conftest import IN_A_PROCESS, ROOT, ctrl_c_default, interrupt, run_main, run_script
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
            if (ROOT / f"{name}.py").exists()]
@@ -152,11 +152,6 @@ def test_train_works_from_a_notebook(script, tmp_path, monkeypatch):
     assert result["global_step"] >= 1024 - 8 and not result["interrupted"]
 
 
-# Run as a user would, each in a new process: the allocation that fails, and an env that
-# gymnasium cannot make (where a package's warning would show). The others in this process.
-IN_A_PROCESS = ("not enough memory", "unknown environment")
-
-
 @pytest.mark.parametrize("args,needle", [
     (["--num-envs", "0"], "--num-envs must be positive"),
     (["--total-timesteps", "-5"], "--total-timesteps must be positive"),
@@ -180,7 +175,7 @@ def test_bad_input_is_one_line_and_exit_2(script, tmp_path, args, needle, capsys
     if "--run-dir" not in args:
         args += ["--run-dir", str(tmp_path)]
     before = set(tmp_path.iterdir())
-    if needle in IN_A_PROCESS:  # the real command, warnings on stderr included
+    if needle in IN_A_PROCESS:  # the real command, warnings on stderr included (conftest)
         p = run_script(f"{script.__name__}.py", *args, timeout=120)
     else:
         p = run_main(f"{script.__name__}.py", *args, capsys=capsys)
