@@ -7,7 +7,9 @@ benchmarks/results/<script>_1m/seed<k>/ as it grows.
     python benchmarks/ddpg_walker_1m.py start ~/ddpg-1m    # start or continue what is unfinished
     python benchmarks/ddpg_walker_1m.py status ~/ddpg-1m   # where each run is; copy the CSVs
     python benchmarks/ddpg_walker_1m.py table              # docs/results.md's table, from the copies
+    python benchmarks/ddpg_walker_1m.py plot               # docs/ddpg_walker_1m.png, from the copies
     python benchmarks/ddpg_walker_1m.py start ~/td3-1m --script td3_walker --seeds 0 1
+    python benchmarks/ddpg_walker_1m.py plot --script td3_walker   # TD3's runs beside DDPG's
 
 The measure (as in the TD3 paper's ablation table): per seed, the mean of the last 10
 evaluations (each the mean return of 10 episodes without exploration noise); over the seeds,
@@ -20,6 +22,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import torch
@@ -148,19 +151,38 @@ def summary(finals):
             f"standard error {sd / len(finals) ** 0.5:.0f}")
 
 
+def plot():
+    """docs/<script>_1m.png from the committed records, drawn as plots.py draws run folders:
+    each seed a thin line, the mean where every seed has a value thick; TD3's beside DDPG's."""
+    sys.path.insert(0, str(ROOT))
+    import plots
+    scripts = ["ddpg_walker"] + (["td3_walker"] if SCRIPT == "td3_walker" else [])
+    with tempfile.TemporaryDirectory() as tmp:
+        runs = []
+        for script in scripts:
+            for seed in SEEDS:
+                record = ROOT / "benchmarks" / "results" / f"{script}_1m" / f"seed{seed}" / "evaluations.csv"
+                if record.exists():  # a folder named as a run folder is, so plots.py knows its script
+                    run = Path(tmp) / f"{script}__Walker2d-v5__seed{seed}__record"
+                    run.mkdir()
+                    shutil.copy(record, run)
+                    runs.append(run)
+        print(f"wrote {plots.compare(runs, ROOT / 'docs' / f'{SCRIPT}_1m.png')}")
+
+
 def main():
     global SCRIPT, RESULTS
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("action", choices=("start", "status", "table"))
+    parser.add_argument("action", choices=("start", "status", "table", "plot"))
     parser.add_argument("parent", nargs="?", type=Path, help="folder of the five run folders")
     parser.add_argument("--script", default=SCRIPT, choices=("ddpg_walker", "td3_walker"))
     parser.add_argument("--seeds", type=int, nargs="+", default=SEEDS,
                         help="start: only these seeds (the others wait for a later start)")
     args = parser.parse_args()
     SCRIPT, RESULTS = args.script, ROOT / "benchmarks" / "results" / f"{args.script}_1m"
-    if args.action != "table" and args.parent is None:
+    if args.action in ("start", "status") and args.parent is None:
         parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m")
-    {"start": lambda: start(args.parent, args.seeds), "status": lambda: status(args.parent), "table": table}[
+    {"start": lambda: start(args.parent, args.seeds), "status": lambda: status(args.parent), "table": table, "plot": plot}[
         args.action]()
 
 
