@@ -334,7 +334,7 @@ def train(cfg: Config):
             opt.step()
             run.global_step = step
             if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
-                run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]))
+                run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
             if step == cfg.sft_steps:
                 result["before"] = held()  # what GRPO (or the control) starts from
                 result["samples"]["before"] = completions(model, cfg, held_out)
@@ -368,7 +368,8 @@ def train(cfg: Config):
             run.update(dict(loss=loss.item(), reward=rewards.mean().item(), flat_groups=flat,
                             kl=info["kl"], clipfrac=info["clipfrac"],
                             length=mask.sum(1).mean().item(),
-                            pass1=held(100)[0] if checked else float("nan"), ratio=info["ratio"]))
+                            pass1=held(100)[0] if checked else float("nan"), ratio=info["ratio"]),
+                       show=checked)
         result["after"], result["samples"]["after"] = held(), completions(model, cfg, held_out)
         print(f"after {'more supervision' if cfg.control else 'GRPO'}: held-out pass@1 "
               f"{result['after'][0]:.3f}, pass@{cfg.group_size} {result['after'][1]:.3f} (phase "

@@ -399,8 +399,7 @@ def compare_maps(run_dirs, out):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("runs", nargs="+", help="run folders, e.g. runs/ppo_cartpole__*")
     parser.add_argument("--out", default=None,
                         help="the PNG to write (default: compare.png, or maps.png with --maps)")

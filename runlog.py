@@ -116,11 +116,12 @@ class UpdateLog:
                   flush=True)
         return True
 
-    def update(self, stats, visited=None, **columns):
+    def update(self, stats, visited=None, show=False, **columns):
         """After an update: its progress.csv row (the step, episodes, recent return, `columns`,
         then the numbers of `stats`; its arrays are kept for inside.png), and every print_every
-        updates (and after the first) a progress line. `visited`: the batch's observations,
-        the last 10 batches' are marked on inside.png's maps."""
+        updates (and after the first, and where `show`) a progress line, without the numbers
+        not measured at this update (nan). `visited`: the batch's observations, the last 10
+        batches' are marked on inside.png's maps."""
         self.updates += 1
         if visited is not None:
             self.visited = [*self.visited[-9:], visited.detach().cpu().numpy()]
@@ -128,11 +129,11 @@ class UpdateLog:
         self.stats = {k: v for k, v in stats.items() if k not in arrays}
         self.kept.append((self.global_step, arrays))
         self.row(**columns, **self.stats)
-        if self.updates % self.cfg.print_every == 0 or self.updates == 1:
+        if self.updates % self.cfg.print_every == 0 or self.updates == 1 or show:
             elapsed, shown = time.time() - self.start_time, {**columns, **self.stats}
             numbers = "  ".join(f"{key.replace('_', ' ') if key == 'running_reward' else key} "
                                 f"{shown[key]:{form}}" for key, form in self.shown.items()
-                                if key in shown)
+                                if key in shown and not np.isnan(shown[key]))
             recent = f"return({self.window}) {self.recent_return():6.1f}  " if self.window else ""
             print(f"step {self.global_step:>7}  {self.global_step / elapsed:6.0f} steps/s  "
                   f"{recent}{numbers}  {elapsed:.1f}s", flush=True)
@@ -194,7 +195,7 @@ class EvaluationLog:
         shipped = Path(__file__).resolve().parent / "docs" / f"{script}2d.pt"
         if cfg.env_id == "Walker2d-v5" and shipped.exists():
             print(f"meanwhile, a trained walker (a 1M-step run's best actor): python "
-                  f"{script}.py --eval {shipped} --gif walker.gif (or --watch)", flush=True)
+                  f"{script}.py --eval {shipped} --gif {script}.gif (or --watch)", flush=True)
 
     def episode_ended(self, step, episode_return):
         self.episodes.append((step, float(episode_return)))
