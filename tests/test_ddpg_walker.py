@@ -20,10 +20,11 @@ from common import UserError
 from conftest import IN_A_PROCESS, ROOT, interrupt, run_main, run_script
 
 
-def play(path, episodes):
-    """What --eval PATH does: the saved actor's returns over `episodes` episodes."""
-    cfg = ddpg.Config(eval=str(path), eval_episodes=episodes)
-    actor, env_id = checkpoints.load_model(cfg.eval, ddpg.SCRIPT, "actor", lambda c: ddpg.Actor(
+def play(path, episodes, script=ddpg):
+    """What --eval PATH does: the saved actor's returns over `episodes` episodes (`script`:
+    ddpg_walker, or td3_walker, whose Actor is DDPG's)."""
+    cfg = script.Config(eval=str(path), eval_episodes=episodes)
+    actor, env_id = checkpoints.load_model(cfg.eval, script.SCRIPT, "actor", lambda c: script.Actor(
         c["obs_dim"], c["act_dim"], c["config"]["hidden"], np.array(c["low"]), np.array(c["high"])))
     return report.play_actor(cfg, cfg.eval, env_id, actor)
 

@@ -10,7 +10,7 @@ import torch
 
 import td3_walker as td3
 from conftest import ROOT, interrupt, run_main, run_script
-from test_ddpg_walker import PENDULUM, pendulum_flags
+from test_ddpg_walker import PENDULUM, pendulum_flags, play
 
 
 @pytest.mark.quick
@@ -118,3 +118,10 @@ def test_help_shows_the_three_fixes():
     p = run_script("td3_walker.py", "--help", timeout=120)
     assert p.returncode == 0, p.stderr
     assert all(flag in p.stdout for flag in ("--policy-delay", "--target-noise", "--noise-clip"))
+
+
+def test_the_shipped_td3_walker_walks():
+    """docs/td3_walker2d.pt, the best actor of TD3's 1M-step Walker2d runs (the README's TD3
+    --eval command replays it), still loads as a TD3 model and walks: one episode, >= 1000."""
+    (ret,) = play(ROOT / "docs" / "td3_walker2d.pt", 1, script=td3)
+    assert ret >= 1000, ret
