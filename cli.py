@@ -29,8 +29,8 @@ class OutputFlags:
     """What a run writes and shows, and playback: the flags every script shares."""
 
     run_dir: str = "runs"
-    """parent folder of the run folder <script>__<env>__seed<k>__<time>/ (runs/latest: the
-    newest one, for --eval and --resume)"""
+    """parent folder of the run folder <script>__<env>__seed<k>__<time>/ (runs/latest: this
+    script's newest one, for --eval and --resume)"""
     print_every: int = 10
     """print a progress line every this many updates"""
     gifs: bool = True
