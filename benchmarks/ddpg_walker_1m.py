@@ -126,7 +126,7 @@ def last10(rows, upto=None):
 def table():
     lines = ["| seed | " + " | ".join(f"{m // 1000}k" for m in MILESTONES) + " |",
              "|---|" + "---|" * len(MILESTONES)]
-    finals = []
+    finals, peaks = [], []
     for seed in SEEDS:
         path = RESULTS / f"seed{seed}" / "evaluations.csv"
         rows = read(path) if path.exists() else []
@@ -135,19 +135,22 @@ def table():
         lines.append(f"| {seed} | " + " | ".join(cells) + " |")
         if reached >= BUDGET:
             finals.append(last10(rows, BUDGET))
+            peaks.append(max(m for step, m in rows if step <= BUDGET))
     print("\n".join(lines))
     print("\nEach cell: the mean of the last 10 evaluations up to that step (- : not reached).")
     print(summary(finals))
+    if len(peaks) >= 2:  # the TD3 paper's table 1 measure: each run's highest evaluation
+        print(summary(peaks, "at 1M, by each one's highest evaluation"))
 
 
-def summary(finals):
+def summary(finals, what="at 1M"):
     """'Over the N seeds at 1M: mean M, standard error S' (or how many are there yet)."""
     if len(finals) < 2:
         return f"{len(finals)} of {len(SEEDS)} runs have reached 1M steps: no mean yet"
     mean = sum(finals) / len(finals)
     sd = (sum((x - mean) ** 2 for x in finals) / (len(finals) - 1)) ** 0.5  # between seeds
     done = "" if len(finals) == len(SEEDS) else f" (of {len(SEEDS)}; the others still run)"
-    return (f"Over the {len(finals)} seeds at 1M{done}: mean {mean:.0f}, "
+    return (f"Over the {len(finals)} seeds {what}{done}: mean {mean:.0f}, "
             f"standard error {sd / len(finals) ** 0.5:.0f}")
 
 
