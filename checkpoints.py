@@ -103,15 +103,17 @@ def config_to_resume(cfg, script):
     return cfg
 
 
-def save(path, script, cfg, step, obs, holders):
+def save(path, script, cfg, step, obs, holders, say=True):
     """checkpoint.pt: the settings, the step, the loop's obs and each holder's state_dict()
-    (networks, optimizers, buffer, env, random generators, logs)."""
+    (networks, optimizers, buffer, env, random generators, logs); a line says so if `say`
+    (after a Ctrl-C the run's one last line says where its checkpoint is)."""
     started = time.time()
     save_checkpoint(dict(script=script, config=asdict(cfg), global_step=step,
                          obs=torch.as_tensor(obs),
                          **{key: obj.state_dict() for key, obj in holders.items()}), path)
-    print(f"checkpoint at step {step}: {path} ({path.stat().st_size / 2**20:.0f} MB, "
-          f"written in {time.time() - started:.1f} s)", flush=True)
+    if say:
+        print(f"checkpoint at step {step}: {path} ({path.stat().st_size / 2**20:.0f} MB, "
+              f"written in {time.time() - started:.1f} s)", flush=True)
 
 
 def resume(run_dir, script, cfg, holders):

@@ -329,7 +329,7 @@ def train(cfg: Config):
             if (global_step % cfg.checkpoint_every == 0 or global_step == cfg.total_timesteps
                     or ctrl_c.pressed):  # (a larger --total-timesteps can extend a run)
                 checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
-                                 in_checkpoint)
+                                 in_checkpoint, say=not ctrl_c.pressed)
                 run.clock_from(global_step)  # steps/s: learning, not the write
             if ctrl_c.pressed:  # stop where the step is whole (its checkpoint is written)
                 break

@@ -403,6 +403,8 @@ def test_ctrl_c_saves_a_checkpoint_at_the_step_it_stopped_and_resume_is_the_unbr
     stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
     assert 1100 <= stopped < 2400 and stopped % 800  # where Ctrl-C came, not a periodic checkpoint
     assert f"interrupted at step {stopped}" in out and f"--resume {run}" in out
+    assert out.splitlines()[-1].startswith(f"interrupted at step {stopped};")  # the one line:
+    assert f"checkpoint at step {stopped}:" not in out  # no second about the checkpoint
     result = ddpg.train(ddpg.Config(resume=str(run), run_dir=str(tmp_path)))
     assert result["global_step"] == 2400
     assert_same_run(unbroken["run_dir"], run)

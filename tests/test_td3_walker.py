@@ -76,6 +76,8 @@ def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
     (run,) = (tmp_path / "cut").iterdir()
     stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
     assert 1100 <= stopped < 2400 and f"--resume {run}" in out
+    assert out.splitlines()[-1].startswith(f"interrupted at step {stopped};")  # one last line,
+    assert f"checkpoint at step {stopped}:" not in out  # not a second one about the checkpoint
     td3.train(td3.Config(resume=str(run)))
     for name in ("evaluations.csv", "episodes.csv"):
         assert (run / name).read_bytes() == (unbroken / name).read_bytes(), name
