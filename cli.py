@@ -121,7 +121,7 @@ def parse_config(cls, argv=None, description=None):
     docs = {}
     for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
         docs.update(_field_docs(klass))
-    own = vars(cls).get("__annotations__", {})
+    own, unused = vars(cls).get("__annotations__", {}), getattr(cls, "UNUSED_FLAGS", ())
     for f in sorted(dataclasses.fields(cls), key=lambda f: f.name not in own):
         name = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
         kind = name.replace(" | None", "")  # "float | None" -> "float"
@@ -132,12 +132,13 @@ def parse_config(cls, argv=None, description=None):
         flag = "--" + f.name.replace("_", "-")
         text = docs.get(f.name, "") + (f"; none on the command line: {flag} none"
                                        if "None" in name else "")
-        parser.add_argument(flag, default=f.default, **how, help=text.replace("%", "%%"))
+        parser.add_argument(flag, default=f.default, **how, help=argparse.SUPPRESS if f.name in
+                            unused else text.replace("%", "%%"))  # unused: out of --help
     args = parser.parse_args(argv)
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):
             parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")
-    if getattr(args, "watch", False) and headless():  # fail now, not after hours of training
+    if getattr(args, "watch", False) and headless() and "watch" not in unused:  # fail now
         parser.error("--watch opens a window, but this machine has no display (see the GIFs, "
                      "or write one of a saved model: --eval RUN --gif OUT.gif)")
     script = Path(inspect.getfile(cls)).stem  # the script whose Config this is

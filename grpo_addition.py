@@ -94,6 +94,7 @@ class TinyGPT(nn.Module):
 class Config(cli.OutputFlags):
     """The task's and the algorithm's settings; the flags every script shares (--run-dir,
     --eval, --threads, ...) come from cli.OutputFlags."""
+    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif")  # no env to play: not in --help
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 3

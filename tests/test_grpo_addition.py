@@ -141,6 +141,22 @@ def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_help_leaves_out_the_shared_flags_that_play_an_env(capsys):
+    """--help shows no flag that has no meaning without an env (--gifs, --eval-episodes,
+    --watch, --gif); given anyway, --watch gets one line saying why (not a hint to use --gif)."""
+    with pytest.raises(SystemExit):
+        grpo.cli.parse_config(grpo.Config, ["--help"])
+    shown = capsys.readouterr().out
+    assert "--eval-seed" in shown and "--run-dir" in shown
+    for flag in ("--gifs", "--eval-episodes", "--watch", "--gif "):
+        assert flag not in shown, flag
+    with pytest.raises(SystemExit) as stop:
+        grpo.cli.parse_config(grpo.Config, ["--watch"])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "this task has none" in err and "--gif OUT.gif" not in err, err
+
+
 def test_ctrl_c_keeps_the_model(tmp_path):
     from conftest import interrupt
 
