@@ -65,7 +65,7 @@ def save_whole(plt, fig, path, dpi):
     """Save `fig` as `path`, written whole (aside, then renamed), Ctrl-C or not; close it."""
     tmp = Path(f"{path}.tmp.png")
     try:
-        fig.savefig(tmp, dpi=dpi)
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")  # nothing cut at the edges
         tmp.replace(path)
     finally:
         plt.close(fig)
