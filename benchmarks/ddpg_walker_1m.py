@@ -29,9 +29,14 @@ import torch
 
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPT = "ddpg_walker"  # or td3_walker (--script)
-RESULTS = ROOT / "benchmarks" / "results" / f"{SCRIPT}_1m"
 SEEDS, BUDGET = (0, 1, 2, 3, 4), 1_000_000
 MILESTONES = (100_000, 300_000, 500_000, 1_000_000)
+
+
+def record(seed, script=None):
+    """The committed copy of a run's evaluations.csv:
+    benchmarks/results/<script>_1m/seed<k>/evaluations.csv (script: SCRIPT unless given)."""
+    return ROOT / "benchmarks" / "results" / f"{script or SCRIPT}_1m" / f"seed{seed}" / "evaluations.csv"
 
 
 def run_of(parent, seed):
@@ -67,7 +72,7 @@ def start(parent, seeds=SEEDS):
         if step >= BUDGET:
             print(f"seed {seed}: finished ({run})")
             continue
-        committed = RESULTS / f"seed{seed}" / "evaluations.csv"
+        committed = record(seed)
         if run is None and committed.exists() and read(committed)[-1][0] >= BUDGET:
             # e.g. on a new machine: the record is already complete; rerunning would only repeat it
             print(f"seed {seed}: finished (its record {committed.relative_to(ROOT)} reaches 1M)")
@@ -90,7 +95,7 @@ def start(parent, seeds=SEEDS):
 def status(parent):
     for seed in SEEDS:
         run = run_of(parent, seed)
-        out = RESULTS / f"seed{seed}"
+        out = record(seed).parent
         if run is None or not (run / "evaluations.csv").exists():
             rows = read(out / "evaluations.csv") if (out / "evaluations.csv").exists() else []
             print(f"seed {seed}: no evaluations here yet" + (
@@ -128,7 +133,7 @@ def table():
              "|---|" + "---|" * len(MILESTONES)]
     finals, peaks = [], []
     for seed in SEEDS:
-        path = RESULTS / f"seed{seed}" / "evaluations.csv"
+        path = record(seed)
         rows = read(path) if path.exists() else []
         reached = rows[-1][0] if rows else 0
         cells = [f"{last10(rows, m):.0f}" if reached >= m else "-" for m in MILESTONES]
@@ -164,17 +169,17 @@ def plot():
         runs = []
         for script in scripts:
             for seed in SEEDS:
-                record = ROOT / "benchmarks" / "results" / f"{script}_1m" / f"seed{seed}" / "evaluations.csv"
-                if record.exists():  # a folder named as a run folder is, so plots.py knows its script
+                path = record(seed, script)
+                if path.exists():  # in a folder named as run folders are: plots.py knows its script
                     run = Path(tmp) / f"{script}__Walker2d-v5__seed{seed}__record"
                     run.mkdir()
-                    shutil.copy(record, run)
+                    shutil.copy(path, run)
                     runs.append(run)
         print(f"wrote {plots.compare(runs, ROOT / 'docs' / f'{SCRIPT}_1m.png')}")
 
 
 def main():
-    global SCRIPT, RESULTS
+    global SCRIPT
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("action", choices=("start", "status", "table", "plot"))
     parser.add_argument("parent", nargs="?", type=Path, help="folder of the five run folders")
@@ -182,11 +187,11 @@ def main():
     parser.add_argument("--seeds", type=int, nargs="+", default=SEEDS,
                         help="start: only these seeds (the others wait for a later start)")
     args = parser.parse_args()
-    SCRIPT, RESULTS = args.script, ROOT / "benchmarks" / "results" / f"{args.script}_1m"
+    SCRIPT = args.script
     if args.action in ("start", "status") and args.parent is None:
         parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m")
-    {"start": lambda: start(args.parent, args.seeds), "status": lambda: status(args.parent), "table": table, "plot": plot}[
-        args.action]()
+    {"start": lambda: start(args.parent, args.seeds), "status": lambda: status(args.parent),
+     "table": table, "plot": plot}[args.action]()
 
 
 if __name__ == "__main__":
