@@ -14,7 +14,7 @@ where PPO takes many behind its clip. The loop in train(), top to bottom:
              rollout's end and at time-limit truncations; advantages A_t = R_t - V(s_t)
     update   one gradient step on -log pi(a|s) * A + c_v * (R - V)^2 / 2 - c_e * entropy
     log      one progress.csv row per update; a progress line now and then
-After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_cartpole).
+After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_updates).
 
     python actor_critic_cartpole.py                  # train until solved (under a minute on a CPU)
     python actor_critic_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
@@ -26,19 +26,22 @@ train() 里的循环：采集数据、算 n 步回报和优势、更新、记录
 
 import copy
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn as nn
 from torch.distributions import Categorical
 
+import cartpole_env
 import checkpoints
 import cli
 import common
+import plots
 import report
 import runlog
 
-SCRIPT = "actor_critic_cartpole"  # names its run folders; saved in its models (it loads no other's)
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 
 
 # ==== Networks ============================================================================
@@ -201,12 +204,28 @@ def a2c_loss(model, data, cfg):
                       explained_var=explained.item(), values=values.detach(), ret=ret)
 
 
+# progress.csv's columns, once: (progress-line format or None, picture label, CleanRL's tag)
+LOGGED = dict(running_reward=("6.1f", "tutorial 004's running reward"),
+              lr=(None, "learning rate", "charts/learning_rate"), loss_pi=("+.3f", "policy loss"),
+              loss_v=(".2e", "value loss"), entropy=(".3f", "entropy of pi (nats)"),
+              explained_var=(None, "1 - Var(R - V) / Var(R)", "losses/explained_variance"))
+SMOKE = dict(total_timesteps=2048, stop_when_solved=False, eval_episodes=2)  # tests: seconds
+
+
+def pictures(cfg):
+    """curve.png: pi's entropy below the returns; inside.png (docs/inside.md): the share of its
+    targets' variance V explains, and V(s_t) against its targets R_t at three updates."""
+    return dict(curve=[[plots.lines("entropy")]], inside=[[
+        plots.lines("explained_var", ylim=(-1, 1.05), title="1 - Var(R - V) / Var(R)"),
+        plots.scatters("ret", "values", "target R_t", "V(s_t)")]])
+
+
 # ==== Training ============================================================================
 
 
 def train(cfg: Config):
     """Train A2C with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
-    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_cartpole)."""
+    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_updates)."""
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
@@ -225,8 +244,8 @@ def train(cfg: Config):
     default_scale = 1 - cfg.gamma if cfg.gamma < 1 else 1.0
     reward_scale = cfg.reward_scale if cfg.reward_scale is not None else default_scale
     # The run folder: progress.csv, a progress line with these numbers every print_every updates
-    run = runlog.UpdateLog(SCRIPT, cfg, shown=dict(
-        running_reward="6.1f", loss_pi="+.3f", loss_v=".2e", entropy=".3f"))
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED)
+    play = report.sampled_and_greedy(lambda x: model(x)[0], device)  # checks, evaluations, GIF
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
@@ -260,8 +279,7 @@ def train(cfg: Config):
                 # threshold; then pi as it is now must too (at most one check per update)
                 if run.solved(threshold) and cfg.stop_when_solved and checked < update:
                     checked = update  # pi plays eval_episodes episodes: does it hold?
-                    if stopped := report.pi_holds(lambda x: model(x)[0], device, cfg,
-                                                  threshold, global_step):
+                    if stopped := report.pi_holds(play, cfg, threshold, global_step):
                         break
             if stopped:  # the partial rollout trains nothing; a last row says where it ended
                 run.stopped_row(running_reward=running_reward, lr=optimizer.param_groups[0]["lr"])
@@ -293,7 +311,9 @@ def train(cfg: Config):
     envs.close()
     nets = {when: (lambda x, net=net: net(x)[0], lambda x, net=net: net(x)[1])  # for the maps:
             for when, net in (("untrained", untrained), ("trained", model))}  # obs -> pi, V
-    return report.finish_cartpole(run, threshold, nets, device, reward_scale)
+    before = report.sampled_and_greedy(nets["untrained"][0], device)  # before.gif
+    return report.finish_updates(run, threshold, play, before, pictures(cfg),
+                                 cartpole_env.maps(cfg, nets, device, run.visited, reward_scale))
 
 
 def main(argv=None):
@@ -304,7 +324,7 @@ def main(argv=None):
         if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
             model, env_id = checkpoints.load_model(saved, SCRIPT, "model", lambda ckpt: (
                 ActorCritic(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])))
-            report.play_policy(cfg, saved, env_id, lambda x: model(x)[0])
+            report.play(cfg, saved, env_id, report.sampled_and_greedy(lambda x: model(x)[0], "cpu"))
 
 
 if __name__ == "__main__":

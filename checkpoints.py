@@ -16,12 +16,6 @@ import torch
 
 from common import UserError, written_whole
 
-# Settings --resume may change: how long to go on, and what is shown or written. The rest
-# decide the run's numbers and come from its checkpoint.
-MAY_CHANGE_ON_RESUME = ("total_timesteps", "print_every", "gifs", "tensorboard", "curves",
-                        "watch", "resume", "run_dir")
-
-
 def save_checkpoint(obj, path):
     """torch.save, flushed to disk, written whole."""
     with written_whole(path) as tmp, open(tmp, "wb") as f:
@@ -32,10 +26,10 @@ def save_checkpoint(obj, path):
 
 def load_checkpoint(path, required=(), script=None):
     """torch.load(weights_only=True), or one clear UserError; a run folder means its model.pt.
-    With `script` (e.g. "ppo_cartpole"), a checkpoint that names another script is refused."""
+    With `script` (a script's name), a checkpoint that names another script is refused."""
     path = Path(path) / "model.pt" if Path(path).is_dir() else Path(path)
     if not path.is_file():
-        here = Path(__file__).resolve().parent / path  # e.g. docs/ddpg_walker2d.pt, from elsewhere
+        here = Path(__file__).resolve().parent / path  # e.g. a model in docs/, from elsewhere
         where = "" if path.is_absolute() else f" (relative to {Path.cwd()}, where you are" + (
             f"; did you mean {here}?)" if here.exists() else ")")
         raise UserError(f"no checkpoint at {path}{where}")
@@ -83,18 +77,22 @@ def load_model(path, script, key, build):
 
 
 def config_to_resume(cfg, script):
-    """The Config of the run cfg.resume, as saved, with the flags of MAY_CHANGE_ON_RESUME that
-    this command set. A learning setting set to something else than the saved run's is refused."""
+    """The Config of the run cfg.resume, as saved, with the flags of the Config's
+    MAY_CHANGE_ON_RESUME (cli.CheckpointFlags) that this command set. A learning setting set
+    to something else than the saved run's is refused."""
     path = Path(cfg.resume) / "checkpoint.pt"
+    if not path.exists() and (Path(cfg.resume) / "model.pt").exists():  # whose run is it?
+        load_checkpoint(Path(cfg.resume) / "model.pt", script=script)  # another's: says so
     saved = load_checkpoint(path, required=("config", "global_step", "buffer"), script=script)
+    may_change = type(cfg).MAY_CHANGE_ON_RESUME
     defaults = {f.name: f.default for f in dataclasses.fields(cfg)}
     kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}
     for name, value in asdict(cfg).items():
-        if name in MAY_CHANGE_ON_RESUME or value in (defaults[name], kept[name]):
+        if name in may_change or value in (defaults[name], kept[name]):
             continue
         raise UserError(f"--resume continues the run with its saved settings: --"
                         f"{name.replace('_', '-')} {value} differs from the saved {kept[name]}")
-    changed = {name: getattr(cfg, name) for name in MAY_CHANGE_ON_RESUME
+    changed = {name: getattr(cfg, name) for name in may_change
                if getattr(cfg, name) != defaults[name]}
     cfg = type(cfg)(**{**kept, **changed})
     if cfg.total_timesteps <= saved["global_step"]:
@@ -147,37 +145,6 @@ class RandomState:
     @property
     def action_space(self):
         return self.env.action_space.np_random.bit_generator
-
-
-class MujocoEnvState:
-    """A MuJoCo env mid-episode as a state_dict(): the simulator's whole state (positions,
-    velocities, the solver's warm start), the generator used at reset, and the wrappers'
-    counters (the time limit's steps, the episode's return and length so far)."""
-
-    COUNTERS = ("_elapsed_steps", "episode_returns", "episode_lengths")
-
-    def __init__(self, env):
-        self.env = env
-
-    def state_dict(self):
-        import mujoco
-
-        sim, what = self.env.unwrapped, mujoco.mjtState.mjSTATE_INTEGRATION
-        state = np.empty(mujoco.mj_stateSize(sim.model, what))
-        mujoco.mj_getState(sim.model, sim.data, state, what)
-        return dict(mujoco=torch.from_numpy(state), rng=sim.np_random.bit_generator.state,
-                    **{name: float(self.env.get_wrapper_attr(name)) if name == "episode_returns"
-                       else int(self.env.get_wrapper_attr(name)) for name in self.COUNTERS})
-
-    def load_state_dict(self, saved):
-        import mujoco
-
-        sim = self.env.unwrapped
-        mujoco.mj_setState(sim.model, sim.data, saved["mujoco"].numpy(),
-                           mujoco.mjtState.mjSTATE_INTEGRATION)
-        sim.np_random.bit_generator.state = saved["rng"]
-        for name in self.COUNTERS:
-            self.env.set_wrapper_attr(name, saved[name])
 
 
 class CtrlC:

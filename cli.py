@@ -1,6 +1,6 @@
 """The command line: the flags every script shares (the output flags, the solved rule's
-settings, DDPG's checkpoints), a script's Config read from flags, and one-line errors with
-their exit codes (2: bad input, 130: Ctrl-C).
+settings, the checkpoints of a script that resumes), a script's Config read from flags, and
+one-line errors with their exit codes (2: bad input, 130: Ctrl-C).
 
 A Config is a @dataclass; each field is a flag (`num_envs: int = 8` -> `--num-envs 8`), its
 help the string under it, bool -> `--x/--no-x`, `float | None` also takes `none`.
@@ -10,6 +10,7 @@ import argparse
 import ast
 import contextlib
 import dataclasses
+import difflib
 import inspect
 import sys
 import textwrap
@@ -35,7 +36,8 @@ class OutputFlags:
     """print a progress line every this many updates"""
     gifs: bool = True
     """write before.gif (untrained) and after.gif (trained) to the run folder, one episode each
-    (CartPole scripts: actions drawn from pi, as in training and in tutorial 004's GIFs)"""
+    (a policy over discrete actions: actions drawn from pi, as in training and in tutorial
+    004's GIFs)"""
     curves: bool = True
     """draw curve.png (the learning curve) and inside.png (what the updates do inside the
     algorithm; docs/inside.md) in the run folder"""
@@ -43,7 +45,8 @@ class OutputFlags:
     """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
     names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
     eval_episodes: int = 10
-    """episodes of each evaluation (DDPG: each one; CartPole: the checks and the last; --eval)"""
+    """episodes of each evaluation (the periodic ones, the solved rule's checks, the last one,
+    --eval)"""
     eval_seed: int = 10_000
     """seed of the evaluation env (and its action draws), kept apart from the training seed"""
     watch: bool = False
@@ -69,14 +72,14 @@ class OutputFlags:
 
 @dataclass
 class SolvedFlags(OutputFlags):
-    """The CartPole scripts' flags: the shared ones and the solved rule's."""
+    """The flags of a script with a solved rule: the shared ones and the rule's."""
 
     stop_when_solved: bool = True
     """stop once the mean return of the last solved_window finished episodes reaches the
     solved return and pi as it is then does too, over eval_episodes episodes with actions drawn
     from pi (env seed eval_seed + 1); checked at most once per update"""
     solved_return: float | None = None
-    """the return that counts as solved; none = the env's reward_threshold (CartPole-v1: 475)"""
+    """the return that counts as solved; none = the env's reward_threshold (CartPole's: 475)"""
     solved_window: int = 20
     """how many of the last finished episodes the solved rule averages (and the progress
     line's return shows)"""
@@ -88,7 +91,13 @@ class SolvedFlags(OutputFlags):
 
 @dataclass
 class CheckpointFlags(OutputFlags):
-    """DDPG's and TD3's flags: the shared ones, their progress lines and their checkpoints."""
+    """The flags of a script that evaluates every so many steps and resumes from its
+    checkpoints: the shared ones, its progress lines and its checkpoints."""
+
+    # Settings --resume may change: how long to go on, and what is shown or written. The
+    # rest decide the run's numbers and come from its checkpoint.
+    MAY_CHANGE_ON_RESUME = ("total_timesteps", "print_every", "gifs", "tensorboard", "curves",
+                            "watch", "resume", "run_dir")
 
     print_every: int = 1000
     """print a progress line every this many env steps"""
@@ -134,7 +143,13 @@ def parse_config(cls, argv=None, description=None):
                                        if "None" in name else "")
         parser.add_argument(flag, default=f.default, **how, help=argparse.SUPPRESS if f.name in
                             unused else text.replace("%", "%%"))  # unused: out of --help
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # a mistyped flag: the nearest known one, if any is near
+        flags = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
+        near = difflib.get_close_matches(next((u.split("=")[0] for u in unknown
+                                               if u.startswith("--")), ""), flags, n=1)
+        parser.error(f"unrecognized arguments: {' '.join(unknown)}"
+                     + (f" (did you mean {near[0]}?)" if near else ""))
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):
             parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")
@@ -160,8 +175,8 @@ def latest_run(path, script):
     run folder of `script` in that folder, by the time in its name; a path that exists as it
     is stays as it is.
 
-    >>> latest_run("runs/ppo_cartpole__CartPole-v1__seed0__20260101-120000", "ppo_cartpole")
-    'runs/ppo_cartpole__CartPole-v1__seed0__20260101-120000'
+    >>> latest_run("runs/my_script__some_env__seed0__20260101-120000", "my_script")
+    'runs/my_script__some_env__seed0__20260101-120000'
     """
     parts = Path(path).parts
     if "latest" not in parts or Path(path).exists():
@@ -212,19 +227,6 @@ def check_ranges(config, **ranges):
         if not (value is None and optional or value is not None and inside(value)):
             raise ValueError(f"--{name.replace('_', '-')} must be {words}"
                              f"{' or none' if optional else ''}, got {value}")
-
-
-def check_mujoco(env_id):
-    """A gymnasium env that is not a MuJoCo one is refused (from its registration; no env is
-    made). Other ids: train() says what is wrong with them."""
-    try:
-        entry = gym.spec(env_id).entry_point
-    except gym.error.Error:
-        return  # unknown: train() says so, with gymnasium's suggestion
-    if isinstance(entry, str) and entry.startswith("gymnasium.envs."):
-        check(entry.startswith("gymnasium.envs.mujoco"),
-              f"{env_id} is not a MuJoCo env; this script trains MuJoCo tasks (Walker2d-v5, "
-              "Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5, ...)")
 
 
 @contextlib.contextmanager

@@ -195,6 +195,14 @@ QUANTILES = {"ratio_q05": 0.05, "ratio_q25": 0.25, "ratio_median": 0.5, "ratio_q
              "ratio_q95": 0.95}
 
 
+# ratio_stats' numbers as progress.csv columns: (progress-line format: none, what each is)
+RATIO_COLUMNS = {"ratio_min": (None, "r's min after the update"),
+                 **{key: (None, f"r's {key[6:]} after the update") for key in QUANTILES},
+                 "ratio_max": (None, "r's max after the update"),
+                 "zero_grad_frac": (None, "no policy gradient after it (clip binds on A's side)"),
+                 "clipfrac_after": (None, "clipfrac after the update")}
+
+
 def ratio_stats(ratio, adv, clip_coef, normalize=True):
     """The ratio r = pi(a|s) / pi_old(a|s) over a batch after a PPO update: its min, quantiles
     and max, and zero_grad_frac, the share of samples whose term of L_CLIP has no gradient.
@@ -302,12 +310,11 @@ def make_continuous_env(env_id):
     if not isinstance(env.action_space, gym.spaces.Box):
         env.close()
         raise UserError(f"{env_id} has a {type(env.action_space).__name__} action "
-                                 "space; DDPG needs continuous (Box) actions")
+                        "space; this script needs continuous (Box) actions")
     if not hasattr(env.unwrapped, "data"):  # checkpoints save MuJoCo's simulator state
         env.close()
-        raise UserError(f"{env_id} is not a MuJoCo env; this script trains MuJoCo "
-                                 "tasks (Walker2d-v5, Hopper-v5, HalfCheetah-v5, "
-                                 "InvertedPendulum-v5, ...)")
+        raise UserError(f"{env_id} is not a MuJoCo env; this script trains MuJoCo tasks "
+                        "(its checkpoints save MuJoCo's simulator state)")
     return env
 
 

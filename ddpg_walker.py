@@ -11,13 +11,10 @@ and an evaluation every 5000 steps over 10 episodes. The loop in train(), top to
              truncation is NOT terminal, so its target still bootstraps
     learn    one critic and one actor step on a random minibatch, then the
              targets move a fraction tau toward the networks
-    evaluate every eval_every steps (once only during the warm-up): 10 episodes of mu(s)
-             without noise
+    evaluate every eval_every steps (once in the warm-up): 10 episodes of mu(s), no noise
 
-The run folder keeps evaluations.csv, episodes.csv, model.pt, best.pt and best.gif (the
-best evaluation so far) and curve.png, and every checkpoint_every steps a checkpoint.pt
-from which --resume continues the very same run (runlog.py, checkpoints.py and report.py
-write them).
+The run folder: evaluations.csv, episodes.csv, model.pt (the last actor), best.pt, best.gif,
+curve.png, inside.png, and checkpoint.pt, from which --resume continues the run exactly.
 
     python ddpg_walker.py                         # 1M steps: several hours on a CPU
     python ddpg_walker.py --resume runs/latest     # continue a stopped or killed run exactly
@@ -40,6 +37,8 @@ import torch.nn.functional as F
 import checkpoints
 import cli
 import common
+import mujoco_env
+import plots
 import report
 import runlog
 
@@ -92,8 +91,7 @@ class Config(cli.CheckpointFlags):
     --resume come from cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
-    """gymnasium id of a MuJoCo env with Box actions (Walker2d-v5, Hopper-v5, HalfCheetah-v5,
-    InvertedPendulum-v5, ...)"""
+    """gymnasium id of a MuJoCo env (Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5)"""
     seed: int = 0
     """seeds torch and the env: same seed, same machine => same evaluations.csv on the CPU"""
     total_timesteps: int = 1_000_000
@@ -103,8 +101,7 @@ class Config(cli.CheckpointFlags):
     starts (the TD3 authors' code: 25k; their paper: 1k on Walker2d; at least batch_size)"""
     # --- DDPG ---
     expl_noise: float = 0.1
-    """std of the Gaussian exploration noise, as a fraction of the action range's half-width
-    (0.1 .. 0.3)"""
+    """std of the Gaussian exploration noise, a share of the action box's half-width (0.1 .. 0.3)"""
     batch_size: int = 256
     """transitions per update (64 .. 256; DDPG paper: 64; the TD3 authors' OurDDPG.py: 256)"""
     gamma: float = 0.99
@@ -114,11 +111,9 @@ class Config(cli.CheckpointFlags):
     actor_lr: float = 3e-4
     """Adam step size of the actor (DDPG paper and tutorial: 1e-4; OurDDPG.py: 3e-4)"""
     critic_lr: float = 3e-4
-    """Adam step size of the critic (DDPG paper and tutorial: 1e-3 with weight decay;
-    OurDDPG.py: 3e-4)"""
+    """Adam step size of the critic (DDPG paper, tutorial: 1e-3 and weight decay; OurDDPG: 3e-4)"""
     hidden: int = 256
-    """units in each of the two hidden layers (DDPG paper and tutorial: 400 and 300;
-    OurDDPG.py and CleanRL: 256)"""
+    """units in each of the two hidden layers (DDPG paper, tutorial: 400, 300; OurDDPG.py: 256)"""
     buffer_size: int = 1_000_000
     """replay buffer capacity; the oldest transitions are overwritten"""
     eval_every: int = 5000
@@ -127,7 +122,7 @@ class Config(cli.CheckpointFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        cli.check_mujoco(self.env_id)
+        mujoco_env.check_mujoco(self.env_id)
         cli.check_ranges(
             self, total_timesteps="> 0", batch_size="> 0", hidden="> 0", buffer_size="> 0",
             eval_every="> 0", actor_lr="> 0", critic_lr="> 0", expl_noise=">= 0",
@@ -179,8 +174,7 @@ class ReplayBuffer:
                                                      if torch.is_tensor(x)})
 
     def load_state_dict(self, state):
-        """--resume. A run extended by --total-timesteps may get a larger buffer: it fills on
-        after the saved rows."""
+        """--resume. A run extended by --total-timesteps may get a larger buffer: it fills on."""
         for key, x in vars(self).items():
             if torch.is_tensor(x):
                 x[:state["size"]] = state[key].to(x.device)
@@ -252,12 +246,21 @@ def build(obs_dim, act_dim, low, high, cfg, device):
                 critic_target=critic_target, actor_opt=actor_opt, critic_opt=critic_opt)
 
 
+# An evaluation's own columns in evaluations.csv, once: (progress-line format, picture label)
+LOGGED = dict(q_estimate=(None, "critic: Q(s, mu(s))"), q_states=(None, "states averaged"),
+              discounted_return=(None, "what mu obtained: sum of gamma^k r from s"))
+PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="at each "
+                                     "evaluation, over its states (docs/inside.md; TD3 Fig. 1)")]])
+SHIPPED = Path(__file__).resolve().parent / "docs" / f"{SCRIPT}2d.pt"  # a 1M-step run's best
+SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,  # the tests':
+             eval_every=150, eval_episodes=1, batch_size=64, hidden=64)  # seconds, every file
+
 # ==== Training ============================================================================
 
 
 def train(cfg: Config):
     """Train DDPG with `cfg` (or continue the run cfg.resume). Returns a dict: run_dir, global_step,
-    evaluations, episodes, steps_per_second and interrupted (report.finish_walker)."""
+    evaluations, episodes, steps_per_second and interrupted (report.finish_evaluations)."""
     if cfg.resume:
         cfg = checkpoints.config_to_resume(cfg, SCRIPT)  # the saved run's settings
     # --- seeding and setup ---
@@ -273,17 +276,17 @@ def train(cfg: Config):
     torch.manual_seed(cfg.seed)  # the noise and the minibatches: not shifted by the init
     env.action_space.seed(cfg.seed)  # the random warm-up actions
     buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
-    noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32,
-                                device=device)
+    noise_std = torch.as_tensor(cfg.expl_noise * (high - low) / 2, dtype=torch.float32).to(device)
     low_t = torch.as_tensor(low, dtype=torch.float32, device=device)
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
     obs, _ = env.reset(seed=cfg.seed)
     # The run folder: episodes.csv, evaluations.csv, a progress line every print_every steps
-    run = runlog.EvaluationLog(SCRIPT, cfg, device)
+    run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every,
+                               shipped=SHIPPED if cfg.env_id == "Walker2d-v5" else None)
     actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
-    # checkpoint.pt holds the state_dict() of each of these: all that decides what comes next.
+    # checkpoint.pt holds the state_dict() of each of these: all that decides what comes next;
     # --resume puts each back, and the run goes on exactly as if it had never stopped.
-    in_checkpoint = dict(nets, buffer=buffer, env=checkpoints.MujocoEnvState(env),
+    in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
                          rng=checkpoints.RandomState(env, device), log=run)
     first_step = 0
     if cfg.resume:  # where the run stopped: its step and the loop's obs
@@ -323,9 +326,11 @@ def train(cfg: Config):
                 seen = []  # the evaluation's states and rewards: Q(s, mu(s)) against the return
                 returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
                                           cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
-                best = run.evaluation(global_step, returns, common.q_against_return(
-                    seen, actor, nets["critic"], cfg.gamma, device))  # evaluations.csv
-                report.after_evaluation(run, actor, best, device, actor_info)  # model.pt, best.pt
+                q, g, n = common.q_against_return(seen, actor, nets["critic"], cfg.gamma, device)
+                best = run.evaluation(global_step, returns, q_estimate=q, discounted_return=g,
+                                      q_states=n)  # a row of evaluations.csv
+                report.after_evaluation(run, actor, best, device, actor_info, PICTURES,
+                                        mujoco_env.GIF)  # model.pt, best.pt, the pictures
             if (global_step % cfg.checkpoint_every == 0 or global_step == cfg.total_timesteps
                     or ctrl_c.pressed):  # (a larger --total-timesteps can extend a run)
                 checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
@@ -334,8 +339,9 @@ def train(cfg: Config):
             if ctrl_c.pressed:  # stop where the step is whole (its checkpoint is written)
                 break
     env.close()
-    # what was saved and how to go on; or before.gif and after.gif
-    return report.finish_walker(run, global_step, ctrl_c.pressed, untrained, actor, device)
+    # model.pt: the actor training ended with; how to go on, or before.gif and after.gif
+    return report.finish_evaluations(run, global_step, ctrl_c.pressed, untrained, actor, device,
+                                     actor_info, mujoco_env.GIF)
 
 
 def main(argv=None):
@@ -347,7 +353,8 @@ def main(argv=None):
             actor, env_id = checkpoints.load_model(saved, SCRIPT, "actor", lambda ckpt: Actor(
                 ckpt["obs_dim"], ckpt["act_dim"], ckpt["config"]["hidden"],
                 np.array(ckpt["low"]), np.array(ckpt["high"])))
-            report.play_actor(cfg, saved, env_id, actor)
+            mu = [("eval_returns", "mu(s), no noise", lambda _: common.deterministic(actor, "cpu"))]
+            report.play(cfg, saved, env_id, mu, mujoco_env.GIF, mujoco_env.watch_camera)
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ PPO line. The run, top to bottom:
 import copy
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -39,7 +40,7 @@ import cli
 import report
 import runlog
 
-SCRIPT = "grpo_addition"  # names its run folders; saved in its models (it loads no other's)
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 VOCAB = "0123456789+=."  # "." ends an answer; after it, padding
 STOI = {ch: i for i, ch in enumerate(VOCAB)}
 
@@ -296,8 +297,17 @@ def completions(model, cfg, held_out, n=6):
     return lines
 
 
-NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "length"), float("nan"))
+# What each step logs, once: progress.csv's columns, each with its format on the progress line
+# (None: only in the CSV) and what it is. A supervised step measures only loss (and pass1).
+LOGGED = dict(loss=(".4f", "loss"), reward=(".3f", "reward of the samples"),
+              flat_groups=(".2f", "groups with equal rewards (no signal)"),
+              kl=(".4f", "KL(pi || pi_ref), k3"), clipfrac=(".3f", "clipfrac"),
+              length=(None, "answer length"), pass1=(".3f", "held-out pass@1 (100 sums)"))
+NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "length"))  # None: unmeasured
 
+# A run of seconds that still writes every file: the tests' smoke run (tests/test_every_script.py)
+SMOKE = dict(digits=1, sft_steps=30, grpo_steps=10, eval_every=10, eval_prompts=10,
+             n_layer=1, d_model=16)
 
 # ==== Training ============================================================================
 
@@ -312,8 +322,7 @@ def train(cfg: Config):
     P, L = 2 * cfg.digits + 2, cfg.digits + 2  # prompt and answer lengths, in tokens
     model = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
     # The run folder: progress.csv, a progress line with these numbers every print_every steps
-    run = runlog.UpdateLog(SCRIPT, cfg, task=f"addition{cfg.digits}", shown=dict(
-        loss=".4f", reward=".3f", flat_groups=".2f", kl=".4f", clipfrac=".3f", pass1=".3f"))
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     held = lambda n=len(held_out): evaluate(model, held_out[:n], cfg)  # noqa: E731
     result = dict(run_dir=run.dir, before=None, after=None, samples={})
 
@@ -334,7 +343,7 @@ def train(cfg: Config):
             loss.backward()
             opt.step()
             run.global_step = step
-            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
+            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are None
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
             if step == cfg.sft_steps:
                 result["before"] = held()  # what GRPO (or the control) starts from
@@ -369,7 +378,7 @@ def train(cfg: Config):
             run.update(dict(loss=loss.item(), reward=rewards.mean().item(), flat_groups=flat,
                             kl=info["kl"], clipfrac=info["clipfrac"],
                             length=mask.sum(1).mean().item(),
-                            pass1=held(100)[0] if checked else float("nan"), ratio=info["ratio"]),
+                            pass1=held(100)[0] if checked else None, ratio=info["ratio"]),
                        show=checked)
         result["after"], result["samples"]["after"] = held(), completions(model, cfg, held_out)
         print(f"after {'more supervision' if cfg.control else 'GRPO'}: held-out pass@1 "

@@ -3,9 +3,9 @@
 From the command line, compare runs: a panel per env, a colour per script, each run a thin
 line that ends where the run stopped, their mean (thick) where all of them ran.
 
-    python plots.py runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> compare.png
-    python plots.py runs/ddpg_walker__* --out walker.png
-    python plots.py --maps runs/ppo_cartpole__* runs/actor_critic_cartpole__*   # -> maps.png
+    python plots.py runs/*                             # every run there -> compare.png
+    python plots.py runs/<script>__* --out mine.png    # the runs of one script
+    python plots.py --maps runs/*                      # the runs that keep maps -> maps.png
 
 matplotlib is imported only here, with its Agg backend (no display needed); labels are
 ASCII (not every machine has CJK fonts). to_tensorboard writes the CSV logs as TensorBoard
@@ -46,19 +46,41 @@ def pyplot():
     return plt
 
 
-def draw_run(run_dir, solved_return=None, solved_step=None, window=20):
-    """Write run_dir/curve.png from the run's CSV logs; returns its path."""
+# A picture is rows of panels. A panel is (n, draw): it takes n axes side by side in its row
+# and draw(axes, logs) fills them from `logs`, the run's tables read from its CSVs
+# ("progress", "evaluations", "episodes": {column: array}), "kept" (per update: (env step,
+# {name: array})) and "labels" ({column: what it is}, from the script's declaration of what
+# it logs). The scripts choose their panels from the builders below; none of them knows a
+# script. Every axis of a row has the same width.
+
+
+def load_logs(run_dir, kept=(), labels=None):
+    """The `logs` of a run folder's pictures (see above)."""
     run_dir = Path(run_dir)
-    plt = pyplot()
-    if (run_dir / "evaluations.csv").exists():  # DDPG
-        fig = draw_ddpg(plt, read_csv(run_dir / "evaluations.csv"))
-    else:
-        episodes = run_dir / "episodes.csv"  # absent when no episode has finished yet
-        fig = draw_cartpole(plt, read_csv(episodes) if episodes.exists() else {},
-                            read_csv(run_dir / "progress.csv"), solved_return, solved_step, window)
-    fig.axes[0].set_title(run_dir.name, fontsize=8)
-    fig.tight_layout()
-    return save_whole(plt, fig, run_dir / "curve.png", dpi=90)
+    logs = dict(kept=list(kept), labels=dict(labels or {}))
+    for name in ("progress", "evaluations", "episodes"):
+        if (run_dir / f"{name}.csv").exists():  # episodes.csv: absent before the first ends
+            logs[name] = read_csv(run_dir / f"{name}.csv")
+    logs["table"] = logs.get("evaluations", logs.get("progress", {}))  # one per update or eval
+    return logs
+
+
+def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=72):
+    """Write run_dir/<name> from `rows` of panels; returns its path."""
+    run_dir, plt = Path(run_dir), pyplot()
+    heights = heights or [row_height] * len(rows)
+    total = sum(heights) + 0.5  # inches; half an inch for the title
+    fig = plt.figure(figsize=(width, total))
+    grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=0.07,
+                            right=0.95, top=1 - 0.55 / total, bottom=0.5 / total)
+    for cell, row in zip(grid, rows):
+        sub = cell.subgridspec(1, sum(n for n, _ in row), wspace=0.7)
+        at = 0
+        for n, fill in row:
+            fill([fig.add_subplot(sub[0, at + i]) for i in range(n)], logs)
+            at += n
+    fig.suptitle(run_dir.name, fontsize=8, y=1 - 0.12 / total)
+    return save_whole(plt, fig, run_dir / name, dpi=dpi)
 
 
 def save_whole(plt, fig, path, dpi):
@@ -73,219 +95,176 @@ def save_whole(plt, fig, path, dpi):
     return path
 
 
-def draw_cartpole(plt, episodes, progress, solved_return, solved_step, window):
-    """Episode returns (faint), their mean over `window` episodes; below, the diagnostics."""
-    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True,
-                                  gridspec_kw=dict(height_ratios=[3, 1.4]))
-    steps, returns = episodes.get("global_step", []), episodes.get("return", [])
-    ax.plot(steps, returns, color="C0", alpha=0.3, lw=0.8, label="episode return")
-    ax.plot(steps, running_mean(np.asarray(returns), window), color="C0", lw=2,
-            label=f"mean of the last {window} episodes")
-    if solved_return is not None:
-        ax.axhline(solved_return, color="gray", ls="--", lw=1, label=f"solved: {solved_return:g}")
-    if solved_step is not None:
-        ax.axvline(solved_step, color="C2", ls=":", lw=1.5, label=f"solved at step {solved_step}")
-    ax.set_ylabel("return")
-    ax.legend(loc="upper left", fontsize=8)
-    # The diagnostics: entropy of pi (left axis); how far each update moved pi (right axis).
-    if "entropy" in progress:
-        ax2.plot(progress["global_step"], progress["entropy"], color="C1", label="entropy")
-        ax2.set_ylabel("entropy (nats)", color="C1")
-    moved = [k for k in ("approx_kl", "kl", "beta") if k in progress]
-    if moved:
-        right = ax2.twinx()
-        for key, color in zip(moved, ("C3", "C4")):
-            right.plot(progress["global_step"], progress[key], color=color, lw=1, label=key)
-        right.set_yscale("log")
-        right.legend(loc="upper right", fontsize=8)
-    ax2.set_xlabel("env steps")
-    fig.tight_layout()
-    return fig
+def episode_returns(window, solved_return=None, solved_step=None):
+    """Panel: the training episodes' returns (faint) and their mean over `window` episodes,
+    the solved return and the step it was reached at."""
+    def fill(axes, logs):
+        ax, episodes = axes[0], logs.get("episodes", {})
+        steps, returns = episodes.get("global_step", []), episodes.get("return", [])
+        ax.plot(steps, returns, color="C0", alpha=0.3, lw=0.8, label="episode return")
+        ax.plot(steps, running_mean(np.asarray(returns), window), color="C0", lw=2,
+                label=f"mean of the last {window} episodes")
+        if solved_return is not None:
+            ax.axhline(solved_return, color="gray", ls="--", lw=1,
+                       label=f"solved: {solved_return:g}")
+        if solved_step is not None:
+            ax.axvline(solved_step, color="C2", ls=":", lw=1.5,
+                       label=f"solved at step {solved_step}")
+        ax.set(xlabel="env steps", ylabel="return")
+        ax.legend(loc="upper left", fontsize=8)
+    return 1, fill
 
 
-def draw_ddpg(plt, evaluations):
-    """Evaluation returns (mean +- std over the evaluation episodes) and the training return."""
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    x, mean, std = evaluations["global_step"], evaluations["eval_mean"], evaluations["eval_std"]
-    ax.plot(x, mean, color="C0", lw=2, label="evaluation: mean return, no noise")
-    ax.fill_between(x, mean - std, mean + std, color="C0", alpha=0.2, label="+- std")
-    ax.plot(x, evaluations["train_return_mean10"], color="C1", lw=1,
-            label="training: mean of the last 10 episodes")
-    ax.set(xlabel="env steps", ylabel="return")
-    ax.legend(loc="upper left", fontsize=8)
-    fig.tight_layout()
-    return fig
+def evaluation_returns():
+    """Panel: the evaluations' mean return +- std, and the training return before each."""
+    def fill(axes, logs):
+        ax, table, labels = axes[0], logs["evaluations"], logs["labels"]
+        x, mean, std = table["global_step"], table["eval_mean"], table["eval_std"]
+        ax.plot(x, mean, color="C0", lw=2, label=labels.get("eval_mean", "eval_mean"))
+        ax.fill_between(x, mean - std, mean + std, color="C0", alpha=0.2, label="+- std")
+        ax.plot(x, table["train_return_mean10"], color="C1", lw=1,
+                label=labels.get("train_return_mean10", "train_return_mean10"))
+        ax.set(xlabel="env steps", ylabel="return")
+        ax.legend(loc="upper left", fontsize=8)
+    return 1, fill
 
 
-# ==== inside.png: what the updates do ====================================================
+def lines(*columns, title=None, right=(), log=False, ylim=None, between=None, hlines=(),
+          steps=False):
+    """Panel: `columns` of the run's table over env steps, labelled as declared; `right`:
+    more columns on a log-scaled right axis; `between`: (low, high, label) shaded; `hlines`:
+    dashed levels; `steps`: drawn as steps, each rise and fall marked."""
+    def fill(axes, logs):
+        ax, table, labels = axes[0], logs["table"], logs["labels"]
+        x = table["global_step"]
+        if between is not None:
+            ax.axhspan(between[0], between[1], color="C2", alpha=0.2, label=between[2])
+        for i, column in enumerate(c for c in columns if c in table):
+            y = table[column]
+            ax.plot(x, y, color=f"C{i + 1}", lw=1,
+                    label=labels.get(column, column), drawstyle="steps-post" if steps else None)
+            if steps:  # the value the next row has: up or down from here
+                nxt = np.append(y[1:], np.nan)
+                for changed, marker, what in ((nxt > y, "^", "rises next"),
+                                              (nxt < y, "v", "falls next")):
+                    ax.scatter(x[changed], y[changed], marker=marker, s=18, label=what)
+        for y in hlines:
+            ax.axhline(y, color="k", ls="--", lw=0.8)
+        ax.set(yscale="log" if log else "linear", xlabel="env steps")
+        if ylim is not None:
+            ax.set_ylim(*ylim)
+        if title:
+            ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7, loc="upper left")
+        shown = [c for c in right if c in table]
+        if shown:
+            twin = ax.twinx()
+            for column, color in zip(shown, ("C3", "C4", "C5")):
+                twin.plot(x, table[column], color=color, lw=1, label=labels.get(column, column))
+            twin.set_yscale("log")
+            twin.legend(loc="upper right", fontsize=8)
+    return 1, fill
 
 
-def draw_inside(run_dir, script, cfg, kept=None, maps=None):
-    """Write run_dir/inside.png (docs/inside.md); returns its path. `kept`: (env step, {name:
-    array}) per update (PPO-clip: ratios and advantages; A2C: V and its targets); `maps`:
-    CartPole's maps (report.draw_inside)."""
-    run_dir, plt = Path(run_dir), pyplot()
-    rows = 1 + (script == "ppo_cartpole") + (maps is not None)
-    height = 3.3 * rows  # inches; margins of half an inch above and below
-    fig = plt.figure(figsize=(12, height))
-    grid = fig.add_gridspec(rows, 4, hspace=0.55, wspace=0.45, left=0.06, right=0.97,
-                            top=1 - 0.5 / height, bottom=0.55 / height)
-    if (run_dir / "evaluations.csv").exists():  # DDPG and TD3
-        overestimation(fig.add_subplot(grid[0, :]), read_csv(run_dir / "evaluations.csv"))
-    else:
-        progress = read_csv(run_dir / "progress.csv")
-        if script == "ppo_cartpole":
-            ratio_panels(fig, grid, progress, kept, cfg["clip_coef"])
-        elif script == "ppo_kl_cartpole":
-            beta_panels(fig, grid, progress, cfg)
-        else:
-            value_fit_panels(fig, grid, progress, kept)
-        if maps is not None:
-            map_panels(fig, grid[rows - 1, :], maps)
-    fig.suptitle(run_dir.name, fontsize=8, y=1 - 0.1 / height)
-    return save_whole(plt, fig, run_dir / "inside.png", dpi=72)
+def spread(prefix, title, hlines=()):
+    """Panel: a batch's distribution of a number after each update, from the columns
+    <prefix>_min, _q05, _median, _q95, _max (common.ratio_stats): bands and the median."""
+    def fill(axes, logs):
+        ax, table = axes[0], logs["table"]
+        x = table["global_step"]
+        ax.fill_between(x, table[f"{prefix}_min"], table[f"{prefix}_max"], color="C0",
+                        alpha=0.15, label="min to max")
+        ax.fill_between(x, table[f"{prefix}_q05"], table[f"{prefix}_q95"], color="C0",
+                        alpha=0.3, label="5% to 95%")
+        ax.plot(x, table[f"{prefix}_median"], color="C0", lw=1, label="median")
+        for y in hlines:
+            ax.axhline(y, color="k", ls="--", lw=0.8)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("env steps")
+        ax.legend(fontsize=7, loc="upper right")
+    return 1, fill
 
 
 def three_updates(kept):
     """An early, a middle and a late update of `kept` (its first, middle and last)."""
-    picks = sorted({0, len(kept) // 2, len(kept) - 1})
+    picks = sorted({0, len(kept) // 2, len(kept) - 1}) if kept else []
     return [(i + 1, *kept[i]) for i in picks]
 
 
-def ratio_panels(fig, grid, progress, kept, eps):
-    """PPO-clip: the ratio r over updates, with the band [1 - eps, 1 + eps]; the share of
-    samples without gradient beside clipfrac; histograms of r at three updates, by sign of A."""
-    ax = fig.add_subplot(grid[0, :2])
-    x = progress["global_step"]
-    ax.fill_between(x, progress["ratio_min"], progress["ratio_max"], color="C0", alpha=0.15,
-                    label="min to max")
-    ax.fill_between(x, progress["ratio_q05"], progress["ratio_q95"], color="C0", alpha=0.3,
-                    label="5% to 95%")
-    ax.plot(x, progress["ratio_median"], color="C0", lw=1, label="median")
-    for y in (1 - eps, 1 + eps):
-        ax.axhline(y, color="k", ls="--", lw=0.8)
-    ax.set_title(f"r = pi/pi_old after each update; dashed: 1 -+ eps = {eps:g}", fontsize=9)
-    ax.set_xlabel("env steps")
-    ax.legend(fontsize=7, loc="upper right")
-    ax = fig.add_subplot(grid[0, 2:])
-    ax.plot(x, progress["clipfrac"], color="C3", lw=0.8, ls=":",
-            label="clipfrac: |r - 1| > eps, during the update")
-    if "clipfrac_after" in progress:  # the same ratios as zero_grad_frac: after the update
-        ax.plot(x, progress["clipfrac_after"], color="C3", lw=1,
-                label="clipfrac after the update")
-    ax.plot(x, progress["zero_grad_frac"], color="C2", lw=1,
-            label="no policy gradient after it (clip binds on A's side)")
-    ax.set_title("share of the batch", fontsize=9)
-    ax.set_xlabel("env steps")
-    ax.legend(fontsize=7)
-    for column, (update, step, arrays) in enumerate(three_updates(kept or [])):
-        ax = fig.add_subplot(grid[1, column])
-        r, adv = arrays["ratio"], arrays["adv"]
-        bins = np.linspace(min(r.min(), 1 - 2 * eps), max(r.max(), 1 + 2 * eps), 40)
-        for sign, color, label in ((1, "C2", "A > 0"), (-1, "C3", "A < 0")):  # one polygon each
-            ax.hist(r[np.sign(adv) == sign], bins=bins, color=color, alpha=0.6, label=label,
-                    histtype="stepfilled")
-        ax.axvspan(1 + eps, bins[-1], color="C2", alpha=0.08)  # A > 0 here: no gradient
-        ax.axvspan(bins[0], 1 - eps, color="C3", alpha=0.08)  # A < 0 here: no gradient
-        for v in (1 - eps, 1 + eps):
-            ax.axvline(v, color="k", ls="--", lw=0.8)
-        ax.set_title(f"update {update} (step {step})", fontsize=8)
-        ax.set_xlabel("r; shaded: no gradient for that colour", fontsize=7)
-        if column == 0:
-            ax.legend(fontsize=7)
+def histograms(array, by_sign_of, band):
+    """Panels (3): the kept `array` at an early, a middle and a late update, split by the sign
+    of the kept `by_sign_of`; `band`: (low, high) dashed, and shaded outside where a sample of
+    that sign gets no gradient (the clip binds: above high for +, below low for -)."""
+    def fill(axes, logs):
+        lo, hi = band
+        for ax, (update, step, arrays) in zip(axes, three_updates(logs["kept"])):
+            r, sign = arrays[array], np.sign(arrays[by_sign_of])
+            bins = np.linspace(min(r.min(), 2 * lo - 1), max(r.max(), 2 * hi - 1), 40)
+            for s, color in ((1, "C2"), (-1, "C3")):  # one polygon each
+                ax.hist(r[sign == s], bins=bins, color=color, alpha=0.6, histtype="stepfilled",
+                        label=f"{by_sign_of} {'>' if s > 0 else '<'} 0")
+            ax.axvspan(hi, bins[-1], color="C2", alpha=0.08)
+            ax.axvspan(bins[0], lo, color="C3", alpha=0.08)
+            for v in band:
+                ax.axvline(v, color="k", ls="--", lw=0.8)
+            ax.set_title(f"{array} at update {update} (step {step})", fontsize=8)
+            ax.set_xlabel(f"{array}; shaded: no gradient for that colour", fontsize=7)
+        if axes and logs["kept"]:
+            axes[0].legend(fontsize=7)
+    return 3, fill
 
 
-def beta_panels(fig, grid, progress, cfg):
-    """PPO-penalty: the KL against [d_targ / 1.5, 1.5 d_targ]; beta, its changes marked."""
-    x, kl, beta = progress["global_step"], progress["kl"], progress["beta"]
-    lo, hi = cfg["d_targ"] / cfg["kl_tolerance"], cfg["d_targ"] * cfg["kl_tolerance"]
-    ax = fig.add_subplot(grid[0, :2])
-    ax.axhspan(lo, hi, color="C2", alpha=0.2, label="beta stays")
-    ax.plot(x, kl, color="C4", lw=1, label="KL(pi_old || pi) after the update")
-    ax.set_yscale("log")
-    ax.set_title(f"KL against [d_targ / {cfg['kl_tolerance']:g}, d_targ x "
-                 f"{cfg['kl_tolerance']:g}], d_targ = {cfg['d_targ']:g}", fontsize=9)
-    ax.set_xlabel("env steps")
-    ax.legend(fontsize=7)
-    ax = fig.add_subplot(grid[0, 2:])
-    ax.plot(x, beta, color="C1", lw=1, drawstyle="steps-post")
-    nxt = np.append(beta[1:], np.nan)  # the beta the next update uses
-    for changed, marker, what in ((nxt > beta, "^", "doubled (KL too high)"),
-                                  (nxt < beta, "v", "halved (KL too low)")):
-        ax.scatter(x[changed], beta[changed], marker=marker, s=18, label=what)
-    ax.set_yscale("log")
-    ax.set_title("beta, the penalty's weight", fontsize=9)
-    ax.set_xlabel("env steps")
-    ax.legend(fontsize=7)
+def scatters(x, y, xlabel, ylabel):
+    """Panels (3): the kept `y` against the kept `x` at an early, a middle and a late update,
+    with the diagonal y = x."""
+    def fill(axes, logs):
+        for ax, (update, step, arrays) in zip(axes, three_updates(logs["kept"])):
+            ax.scatter(arrays[x], arrays[y], s=3, alpha=0.4)
+            both = np.concatenate([arrays[x], arrays[y]])
+            ax.plot([both.min(), both.max()], [both.min(), both.max()], color="k", lw=0.8)
+            ax.set_title(f"update {update} (step {step})", fontsize=8)
+            ax.set_xlabel(xlabel, fontsize=8)
+            ax.set_ylabel(ylabel, fontsize=8)
+    return 3, fill
 
 
-def value_fit_panels(fig, grid, progress, kept):
-    """A2C: the share of its targets' variance V explains; V(s_t) against R_t at 3 updates."""
-    ax = fig.add_subplot(grid[0, 0])
-    ax.plot(progress["global_step"], progress["explained_var"], color="C0", lw=1)
-    ax.set_ylim(-1, 1.05)
-    ax.set_title("1 - Var(R - V) / Var(R)", fontsize=9)
-    ax.set_xlabel("env steps")
-    for column, (update, step, arrays) in enumerate(three_updates(kept or []), start=1):
-        ax = fig.add_subplot(grid[0, column])
-        ax.scatter(arrays["ret"], arrays["values"], s=3, alpha=0.4)
-        lims = [min(arrays["ret"].min(), arrays["values"].min()),
-                max(arrays["ret"].max(), arrays["values"].max())]
-        ax.plot(lims, lims, color="k", lw=0.8)
-        ax.set_title(f"update {update} (step {step})", fontsize=8)
-        ax.set_xlabel("target R_t", fontsize=8)
-        ax.set_ylabel("V(s_t)", fontsize=8)
+def maps_row(maps, title=""):
+    """Panels: 2-D maps over two state variables (an env helper makes them): maps[when] for
+    when in "untrained", "trained" holds "value" and "policy" (x: columns, y: rows); "true",
+    if there, the true value beside the learned one on its colour scale; "visited", states
+    marked on the value maps; "x", "y", "xlabel", "ylabel", "policy_label" describe them."""
+    panels = [(k, w) for k in ("value", "policy") for w in ("untrained", "trained", "true")
+              if w in maps and not (k == "policy" and w == "true")]
+
+    def fill(axes, logs):
+        shared = [maps[w]["value"] for w in ("trained", "true") if w in maps]
+        vmin, vmax = min(m.min() for m in shared), max(m.max() for m in shared)
+        extent = [maps["x"][0], maps["x"][-1], maps["y"][0], maps["y"][-1]]
+        for ax, (key, when) in zip(axes, panels):
+            scale = dict(vmin=0, vmax=1) if key == "policy" else (
+                dict(vmin=vmin, vmax=vmax) if when in ("trained", "true") and "true" in maps
+                else {})
+            image = ax.imshow(maps[when][key], origin="lower", aspect="auto", extent=extent,
+                              cmap="viridis" if key == "value" else "coolwarm", **scale)
+            ax.figure.colorbar(image, ax=ax, fraction=0.046)
+            what = "V(s)" if key == "value" else maps.get("policy_label", "policy")
+            name = "true V^pi(s), Monte-Carlo" if when == "true" else f"{what}, {when}"
+            ax.set_title(f"{title + ': ' if title else ''}{name}", fontsize=8)
+            visited = maps.get("visited")
+            if key == "value" and when in ("trained", "true") and visited is not None:
+                ax.plot(visited[:, 0], visited[:, 1], ",", color="white", alpha=0.5)
+                ax.set_xlim(extent[:2])
+                ax.set_ylim(extent[2:])
+            ax.set_xlabel(maps.get("xlabel", ""), fontsize=7)
+            ax.set_ylabel(maps.get("ylabel", ""), fontsize=7)
+    return len(panels), fill
 
 
-def map_panels(fig, cell, maps, title=""):
-    """V(s) and pi(right|s) over pole angle and angular velocity of maps "untrained" and
-    "trained" in grid cell `cell`; the true V^pi (maps["true"]) beside V on its colour scale,
-    the visited states (maps["visited"]) marked on both."""
-    panels = [(k, w) for k in ("value", "right") for w in ("untrained", "trained", "true")
-              if w in maps and not (k == "right" and w == "true")]
-    sub = cell.subgridspec(1, len(panels), wspace=0.75)
-    shared = [maps[w]["value"] for w in ("trained", "true") if w in maps]
-    vmin, vmax = min(m.min() for m in shared), max(m.max() for m in shared)
-    for column, (key, when) in enumerate(panels):
-        ax, m = fig.add_subplot(sub[0, column]), maps[when]
-        extent = [m["angle"][0], m["angle"][-1], m["velocity"][0], m["velocity"][-1]]
-        scale = dict(vmin=0, vmax=1) if key == "right" else (
-            dict(vmin=vmin, vmax=vmax) if when in ("trained", "true") and "true" in maps else {})
-        image = ax.imshow(m[key], origin="lower", aspect="auto", extent=extent,
-                          cmap="viridis" if key == "value" else "coolwarm", **scale)
-        fig.colorbar(image, ax=ax, fraction=0.046)
-        what = "V(s)" if key == "value" else "pi(right | s)"
-        name = "true V^pi(s), Monte-Carlo" if when == "true" else f"{what}, {when}"
-        ax.set_title(f"{title + ': ' if title else ''}{name}", fontsize=8)
-        visited = maps.get("visited")
-        if key == "value" and when in ("trained", "true") and visited is not None:
-            ax.plot(visited[:, 0], visited[:, 1], ",", color="white", alpha=0.5)
-            ax.set_xlim(extent[:2])
-            ax.set_ylim(extent[2:])
-        ax.set_xlabel("pole angle (rad)", fontsize=7)
-        ax.set_ylabel("angular velocity", fontsize=7)
-
-
-def overestimation(ax, evaluations):
-    """DDPG and TD3, after the TD3 paper's Fig. 1: the critic's Q(s, mu(s)) against the
-    discounted return mu obtained from the same states (the evaluations'), per evaluation."""
-    x = evaluations["global_step"]
-    ax.plot(x, evaluations["q_estimate"], color="C3", lw=1.5, label="critic: Q(s, mu(s))")
-    ax.plot(x, evaluations["discounted_return"], color="C0", lw=1.5,
-            label="what mu obtained: sum of gamma^k r from s")
-    ax.set_title("at each evaluation: the critic's estimate against the discounted return "
-                 "really obtained, over the same states", fontsize=9)
-    ax.set_xlabel("env steps")
-    ax.legend(fontsize=8)
-
-
-# CSV column -> TensorBoard tag (CleanRL's names where CleanRL logs the same thing).
+# The columns every run of a kind writes (runlog's) -> TensorBoard tag, CleanRL's names; a
+# script's own columns take the tags it declares (charts/<column> if none).
 TAGS = {"return": "charts/episodic_return", "recent_return": "charts/recent_return",
-        "lr": "charts/learning_rate", "sps": "charts/SPS", "loss_pi": "losses/policy_loss",
-        "loss_v": "losses/value_loss", "entropy": "losses/entropy", "approx_kl": "losses/approx_kl",
-        "clipfrac": "losses/clipfrac", "kl": "losses/kl", "beta": "charts/beta",
-        "eval_mean": "eval/episodic_return", "eval_std": "eval/episodic_return_std",
-        "train_return_mean10": "charts/episodic_return_mean10"}
+        "sps": "charts/SPS", "eval_mean": "eval/episodic_return",
+        "eval_std": "eval/episodic_return_std", "train_return_mean10": "charts/episodic_return_mean10"}
 NO_TENSORBOARD = "--tensorboard needs the tensorboard package: pip install tensorboard"
 
 
@@ -293,9 +272,9 @@ def tensorboard_installed():
     return importlib.util.find_spec("tensorboard") is not None
 
 
-def to_tensorboard(run_dir, sps=None):
+def to_tensorboard(run_dir, sps=None, tags=None):
     """(Re)write run_dir's TensorBoard events from its CSV logs, and `sps` (steps/s so far,
-    kept out of the CSVs, which are reproducible)."""
+    kept out of the CSVs, which are reproducible); `tags`: {column: tag} of the script's."""
     from torch.utils.tensorboard import SummaryWriter
 
     run_dir = Path(run_dir)
@@ -309,7 +288,8 @@ def to_tensorboard(run_dir, sps=None):
             for i, step in enumerate(table["global_step"]):
                 for key, values in table.items():
                     if key not in ("global_step", "episodes") and np.isfinite(values[i]):
-                        writer.add_scalar(TAGS.get(key, f"charts/{key}"), values[i], int(step))
+                        tag = {**TAGS, **(tags or {})}.get(key, f"charts/{key}")
+                        writer.add_scalar(tag, values[i], int(step))
         if sps is not None:
             writer.add_scalar("charts/SPS", sps, int(step))
 
@@ -319,8 +299,8 @@ RECENT = "mean return of the recent training episodes (the solved rule's window)
 
 
 def curve_of(run_dir):
-    """(steps, values, what the values are) of one run, points without a value dropped:
-    DDPG's evaluation means, or the CartPole scripts' recent_return after each update."""
+    """(steps, values, what the values are) of one run, points without a value dropped: the
+    evaluation means of a run that evaluates, or the recent_return after each update."""
     if (run_dir / "evaluations.csv").exists():
         table, column, what = read_csv(run_dir / "evaluations.csv"), "eval_mean", EVAL_RETURN
     else:
@@ -337,9 +317,9 @@ def compare_figure(run_dirs):
     panels = {}  # (env, what) -> {script: [(steps, values), ...]}
     for run_dir in map(Path, run_dirs):
         if not ((run_dir / "progress.csv").exists() or (run_dir / "evaluations.csv").exists()):
-            print(f"error: {run_dir} is not a run folder (no progress.csv or evaluations.csv)",
-                  file=sys.stderr)
-            sys.exit(2)
+            print(f"note: {run_dir} is not a run folder (no progress.csv or evaluations.csv); "
+                  "left out", file=sys.stderr)
+            continue
         parts = run_dir.name.split("__")  # <script>__<env>__seed<k>__<time>
         steps, values, what = curve_of(run_dir)
         if not len(steps):
@@ -347,6 +327,9 @@ def compare_figure(run_dirs):
             continue
         env = parts[1] if len(parts) > 1 else "env unknown"
         panels.setdefault((env, what), {}).setdefault(parts[0], []).append((steps, values))
+    if not panels:
+        print("error: none of these folders is a run with something to draw", file=sys.stderr)
+        sys.exit(2)
     plt = pyplot()
     fig, axes = plt.subplots(max(len(panels), 1), 1, figsize=(7, 1 + 3.5 * max(len(panels), 1)),
                              squeeze=False)
@@ -378,33 +361,38 @@ def compare(run_dirs, out):
 
 
 def compare_maps(run_dirs, out):
-    """Write `out`: the trained V(s) and pi(right|s) of CartPole runs (maps.npz), a row each."""
+    """Write `out`: the trained maps of value and policy of runs that keep a maps.npz (an env
+    helper's maps_row), a row each."""
     plt, found = pyplot(), []
     for run_dir in map(Path, run_dirs):
-        if not (run_dir / "maps.npz").exists():  # e.g. --no-curves, or a DDPG run: skipped
-            print(f"note: {run_dir} has no maps.npz (a CartPole run that finished training "
-                  "with its pictures writes one); left out", file=sys.stderr)
+        if not (run_dir / "maps.npz").exists():  # e.g. --no-curves, or a run without maps
+            print(f"note: {run_dir} has no maps.npz (a run whose env has maps writes one when "
+                  "it finishes training with its pictures); left out", file=sys.stderr)
             continue
-        found.append((run_dir.name.split("__")[0], dict(np.load(run_dir / "maps.npz"))))
+        m = dict(np.load(run_dir / "maps.npz"))
+        found.append((run_dir.name.split("__")[0], dict(
+            trained=dict(value=m["trained_value"], policy=m["trained_policy"]),
+            **{k: (m[k].item() if m[k].ndim == 0 else m[k])
+               for k in ("x", "y", "xlabel", "ylabel", "policy_label")})))
     if not found:
         print("error: none of these runs has a maps.npz", file=sys.stderr)
         sys.exit(2)
     fig = plt.figure(figsize=(8, 3 * len(found)))
     grid = fig.add_gridspec(len(found), 1, hspace=0.5)
-    for row, (script, m) in enumerate(found):
-        map_panels(fig, grid[row, 0], {"trained": dict(
-            angle=m["angle"], velocity=m["velocity"], value=m["trained_value"],
-            right=m["trained_right"])}, title=script)
+    for row, (script, maps) in enumerate(found):
+        n, fill = maps_row(maps, title=script)
+        sub = grid[row, 0].subgridspec(1, n, wspace=0.75)
+        fill([fig.add_subplot(sub[0, i]) for i in range(n)], {})
     return save_whole(plt, fig, out, dpi=72)
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("runs", nargs="+", help="run folders, e.g. runs/ppo_cartpole__*")
+    parser.add_argument("runs", nargs="+", help="run folders, e.g. runs/* or runs/<script>__*")
     parser.add_argument("--out", default=None,
                         help="the PNG to write (default: compare.png, or maps.png with --maps)")
     parser.add_argument("--maps", action="store_true",
-                        help="the runs' trained V(s) and pi(right|s) side by side (CartPole)")
+                        help="the runs' trained maps of V and pi side by side (runs that keep maps.npz)")
     args = parser.parse_args(argv)
     out = args.out or ("maps.png" if args.maps else "compare.png")
     try:

@@ -21,19 +21,22 @@ README.zh-CN.md 的路线一、路线二。train() 里的循环四步：采集�
 
 import copy
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn as nn
 from torch.distributions import Categorical
 
+import cartpole_env
 import checkpoints
 import cli
 import common
+import plots
 import report
 import runlog
 
-SCRIPT = "ppo_cartpole"  # names its run folders; saved in its models (it loads no other's)
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 
 
 # ==== Networks ============================================================================
@@ -246,12 +249,34 @@ def ppo_update(policy, value_net, optimizer, data, cfg):
                 **common.ratio_stats(info["ratio"], data["adv"], cfg.clip_coef, cfg.norm_adv))
 
 
+# progress.csv's columns, once: (progress-line format or None, picture label, CleanRL's tag)
+LOGGED = dict(lr=(None, "learning rate", "charts/learning_rate"),
+              loss_pi=("+.3f", "-L_CLIP", "losses/policy_loss"),
+              loss_v=(".2e", "L_VF", "losses/value_loss"),
+              approx_kl=(".4f", "approx_kl: KL(pi_old || pi) after it", "losses/approx_kl"),
+              entropy=(".3f", "entropy of pi (nats)", "losses/entropy"),
+              clipfrac=(".3f", "clipfrac: |r - 1| > eps, during it", "losses/clipfrac"),
+              policy_stopped=(None, "1: the early stop ended pi's steps"),
+              **common.RATIO_COLUMNS)  # where r went (common.ratio_stats)
+SMOKE = dict(total_timesteps=2048, stop_when_solved=False, eval_episodes=2)  # tests: seconds
+
+
+def pictures(cfg):
+    """curve.png: pi's entropy and approx_kl below the returns; inside.png (docs/inside.md): r
+    against [1 - eps, 1 + eps], the share of the batch without gradient, r at three updates."""
+    band = (1 - cfg.clip_coef, 1 + cfg.clip_coef)
+    return dict(curve=[[plots.lines("entropy", right=("approx_kl",))]], inside=[
+        [plots.spread("ratio", "r = pi/pi_old after each update; dashed: 1 -+ eps", band),
+         plots.lines("clipfrac", "clipfrac_after", "zero_grad_frac", title="share of the batch")],
+        [plots.histograms("ratio", "adv", band)]])
+
+
 # ==== Training ============================================================================
 
 
 def train(cfg: Config):
     """Train PPO-clip with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
-    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_cartpole)."""
+    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_updates)."""
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
@@ -270,8 +295,8 @@ def train(cfg: Config):
                                  lr=cfg.learning_rate, eps=1e-5)
     num_updates = cfg.total_timesteps // (T * N)
     # The run folder: progress.csv, a progress line with these numbers every print_every updates
-    run = runlog.UpdateLog(SCRIPT, cfg, shown=dict(
-        loss_pi="+.3f", loss_v=".2e", approx_kl=".4f", entropy=".3f", clipfrac=".3f"))
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED)
+    play = report.sampled_and_greedy(policy, device)  # the checks, the evaluations, after.gif
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
@@ -304,7 +329,7 @@ def train(cfg: Config):
                 # threshold; then pi as it is now must too (at most one check per update)
                 if run.solved(threshold) and cfg.stop_when_solved and checked < update:
                     checked = update  # pi plays eval_episodes episodes: does it hold?
-                    if stopped := report.pi_holds(policy, device, cfg, threshold, global_step):
+                    if stopped := report.pi_holds(play, cfg, threshold, global_step):
                         break
             if stopped:  # the partial rollout trains nothing; a last row says where it ended
                 run.stopped_row(lr=optimizer.param_groups[0]["lr"])
@@ -342,7 +367,8 @@ def train(cfg: Config):
             run.update(stats, visited=data["obs"], lr=optimizer.param_groups[0]["lr"])
     envs.close()
     nets = dict(untrained=(untrained, untrained_v), trained=(policy, value_net))  # the maps
-    return report.finish_cartpole(run, threshold, nets, device, cfg.reward_scale)
+    return report.finish_updates(run, threshold, play, report.sampled_and_greedy(untrained, device),
+                                 pictures(cfg), cartpole_env.maps(cfg, nets, device, run.visited))
 
 
 def main(argv=None):
@@ -353,7 +379,7 @@ def main(argv=None):
         if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
             policy, env_id = checkpoints.load_model(saved, SCRIPT, "policy", lambda ckpt: (
                 PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])))
-            report.play_policy(cfg, saved, env_id, policy)
+            report.play(cfg, saved, env_id, report.sampled_and_greedy(policy, "cpu"))
 
 
 if __name__ == "__main__":

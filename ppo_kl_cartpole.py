@@ -10,7 +10,7 @@ the logs show kl and beta. The loop in train(), top to bottom:
     update   a few epochs of shuffled minibatches on the KL-penalized surrogate
     beta     halve or double beta, from the mean KL of the update
     log      one progress.csv row per update; a progress line now and then
-After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_cartpole).
+After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_updates).
 
     python ppo_kl_cartpole.py                  # train until solved (tens of seconds on a CPU)
     python ppo_kl_cartpole.py --eval runs/latest --watch   # replay a saved model in a window
@@ -22,19 +22,22 @@ After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_c
 
 import copy
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn as nn
 from torch.distributions import Categorical, kl_divergence
 
+import cartpole_env
 import checkpoints
 import cli
 import common
+import plots
 import report
 import runlog
 
-SCRIPT = "ppo_kl_cartpole"  # names its run folders; saved in its models (it loads no other's)
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 
 
 # ==== Networks ============================================================================
@@ -240,12 +243,33 @@ def ppo_update(policy, value_net, optimizer, data, beta, cfg):
     return dict(zip(("loss_pi", "loss_v", "entropy", "kl_minibatch"), means), kl=d.mean().item())
 
 
+# progress.csv's columns, once: (progress-line format or None, picture label, CleanRL's tag)
+LOGGED = dict(lr=(None, "learning rate", "charts/learning_rate"),
+              loss_pi=("+.3f", "-L_KLPEN", "losses/policy_loss"),
+              loss_v=(".2e", "L_VF", "losses/value_loss"),
+              kl=(".4f", "KL(pi_old || pi) after the update", "losses/kl"),
+              beta=(".3g", "beta, the penalty's weight it used"), entropy=(".3f", "entropy of pi"),
+              kl_minibatch=(None, "KL(pi_old || pi) on the minibatches, during it"))
+SMOKE = dict(total_timesteps=2048, stop_when_solved=False, eval_episodes=2)  # tests: seconds
+
+
+def pictures(cfg):
+    """curve.png: pi's entropy, the KL and beta below the returns; inside.png (docs/inside.md):
+    the KL against the band where beta stays, and beta, each rise and fall marked."""
+    lo, hi, k = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance, cfg.kl_tolerance
+    return dict(curve=[[plots.lines("entropy", right=("kl", "beta"))]], inside=[[
+        plots.lines("kl", log=True, between=(lo, hi, "beta stays"),
+                    title=f"KL against [d_targ / {k:g}, d_targ x {k:g}], d_targ = {cfg.d_targ:g}"),
+        plots.lines("beta", log=True, steps=True, title="beta: doubled after a KL too high, "
+                    "halved after one too low")]])
+
+
 # ==== Training ============================================================================
 
 
 def train(cfg: Config):
     """Train PPO-penalty with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
-    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_cartpole)."""
+    episode_returns, eval_returns, greedy_returns, interrupted (report.finish_updates)."""
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
@@ -264,8 +288,8 @@ def train(cfg: Config):
                                  lr=cfg.learning_rate, eps=1e-5)
     num_updates = cfg.total_timesteps // (T * N)
     # The run folder: progress.csv, a progress line with these numbers every print_every updates
-    run = runlog.UpdateLog(SCRIPT, cfg, shown=dict(
-        loss_pi="+.3f", loss_v=".2e", kl=".4f", beta=".3g", entropy=".3f"))
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED)
+    play = report.sampled_and_greedy(policy, device)  # the checks, the evaluations, after.gif
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
     # is ignored, its reward is 0, its obs the new episode's first. `autoreset` marks them.
@@ -299,7 +323,7 @@ def train(cfg: Config):
                 # threshold; then pi as it is now must too (at most one check per update)
                 if run.solved(threshold) and cfg.stop_when_solved and checked < update:
                     checked = update  # pi plays eval_episodes episodes: does it hold?
-                    if stopped := report.pi_holds(policy, device, cfg, threshold, global_step):
+                    if stopped := report.pi_holds(play, cfg, threshold, global_step):
                         break
             if stopped:  # the partial rollout trains nothing; a last row says where it ended
                 run.stopped_row(lr=optimizer.param_groups[0]["lr"])
@@ -339,7 +363,8 @@ def train(cfg: Config):
             run.update(stats, visited=data["obs"], lr=optimizer.param_groups[0]["lr"])
     envs.close()
     nets = dict(untrained=(untrained, untrained_v), trained=(policy, value_net))  # the maps
-    return report.finish_cartpole(run, threshold, nets, device, cfg.reward_scale)
+    return report.finish_updates(run, threshold, play, report.sampled_and_greedy(untrained, device),
+                                 pictures(cfg), cartpole_env.maps(cfg, nets, device, run.visited))
 
 
 def main(argv=None):
@@ -350,7 +375,7 @@ def main(argv=None):
         if cfg.eval or cfg.watch:  # play the saved policy (in a window with --watch)
             policy, env_id = checkpoints.load_model(saved, SCRIPT, "policy", lambda ckpt: (
                 PolicyNetwork(ckpt["obs_dim"], ckpt["n_actions"], ckpt["config"]["hidden"])))
-            report.play_policy(cfg, saved, env_id, policy)
+            report.play(cfg, saved, env_id, report.sampled_and_greedy(policy, "cpu"))
 
 
 if __name__ == "__main__":

@@ -1,13 +1,14 @@
-"""What a run plays and shows: the solved rule's second half (pi as it is now plays its check),
-the pictures (curve.png, inside.png with CartPole's maps of V and pi beside the true V), the
-evaluations and GIFs at the end of a run, model.pt / best.pt / best.gif at DDPG's
-evaluations, and --eval / --watch / --gif playback.
+"""What a run plays and shows: the solved rule's second half (the policy as it is now plays
+its check), the pictures at the end of a run (curve.png, inside.png: the panels a script
+chooses, the maps an env helper makes), the evaluations and GIFs at the end, model.pt /
+best.pt / best.gif at each evaluation of a script that evaluates, and --eval / --watch /
+--gif playback. A policy is handed over as `play`: [(result key, what the actions are,
+seed -> (obs -> action)), ...], the first of which the checks, the GIFs and --gif use.
 """
 
 import time
 from dataclasses import asdict
 
-import gymnasium as gym
 import numpy as np
 import torch
 
@@ -15,20 +16,26 @@ import checkpoints
 import common
 import plots
 
-# GIFs look through the model's "track" camera, which follows the walker (gymnasium's
-# default free camera stays put, and a walking agent leaves the picture). Models without
-# such a camera (InvertedPendulum) keep the default view. 1000 steps -> every 4th frame,
-# 250 frames, at half size: a GIF of a few MB.
-CAMERA = dict(camera_name="track")
-GIF = dict(max_frames=250, every=4, scale=2)
+GIF = dict(every=2, scale=2)  # every 2nd frame at half size, unless a script gives its own
 
 
-def pi_holds(logits_of, device, cfg, threshold, step):
-    """Does pi, as it is now, also reach `threshold`: the mean return of cfg.eval_episodes
-    episodes, actions drawn from pi, env and draws seeded with eval_seed + 1 (apart from
-    training and from the evaluation after it)? Says what it found in one line."""
-    returns = common.evaluate(cfg.env_id, common.pi_actions(logits_of, device, cfg.eval_seed + 1),
-                              cfg.eval_episodes, cfg.eval_seed + 1)
+def sampled_and_greedy(logits_of, device):
+    """`play` of a policy over discrete actions, obs -> logits: actions drawn from pi (as in
+    training: what the solved rule judges) and pi's most probable action. The two can differ
+    either way: a policy trained to be sampled need not be good when it is not."""
+    return [("eval_returns", "actions drawn from pi",
+             lambda seed: common.pi_actions(logits_of, device, seed)),
+            ("greedy_returns", "pi's most probable action",
+             lambda seed: common.pi_actions(logits_of, device, seed, greedy=True))]
+
+
+def pi_holds(play, cfg, threshold, step):
+    """Does the policy, as it is now, also reach `threshold`: the mean return of
+    cfg.eval_episodes episodes, acting as play[0] does, env and draws seeded with
+    eval_seed + 1 (apart from training and from the evaluation after it)? Says what it found
+    in one line."""
+    returns = common.evaluate(cfg.env_id, play[0][2](cfg.eval_seed + 1), cfg.eval_episodes,
+                              cfg.eval_seed + 1)
     held = np.mean(returns) >= threshold
     print(f"check at step {step}: pi as it is now averages {np.mean(returns):.1f} over "
           f"{len(returns)} episodes: " + ("it holds, training stops" if held else
@@ -36,114 +43,66 @@ def pi_holds(logits_of, device, cfg, threshold, step):
     return held
 
 
-def cartpole_grid(n):
-    """CartPole states on an n x n grid of pole angle (+-0.21 rad, where an episode ends) and
-    angular velocity (+-2 rad/s), the cart at rest in the middle: (angle, velocity, obs)."""
-    angle, velocity = np.linspace(-0.21, 0.21, n), np.linspace(-2.0, 2.0, n)
-    a, v = np.meshgrid(angle, velocity)  # rows: velocity, columns: angle
-    return angle, velocity, np.stack([np.zeros(a.size), np.zeros(a.size), a.ravel(), v.ravel()], 1)
-
-
-def cartpole_maps(logits_of, value_of, device, n=41):
-    """V(s) and pi(push right | s) on cartpole_grid(n), from obs -> logits and obs -> V."""
-    angle, velocity, obs = cartpole_grid(n)
-    with torch.no_grad():
-        x = torch.as_tensor(obs, dtype=torch.float32, device=device)
-        right, values = torch.softmax(logits_of(x), -1)[:, 1], value_of(x)
-    return dict(angle=angle, velocity=velocity, value=values.reshape(n, n).cpu().numpy(),
-                right=right.reshape(n, n).cpu().numpy())
-
-
-def cartpole_true_values(logits_of, device, gamma, reward_scale, seed, n=11, rollouts=10):
-    """The truth beside the learned V(s): V^pi(s), the expected discounted return of pi from
-    s, by Monte-Carlo: from each state of cartpole_grid(n), `rollouts` episodes with actions
-    drawn from pi, all at once in gymnasium's vectorized CartPole, without a time limit, each
-    followed until it terminates or gamma^t < 0.001 (the rest: under 0.1% of the largest
-    return). Rewards scaled as the script scales them. Returns {"angle", "velocity", "value"}."""
-    from gymnasium.envs.classic_control.cartpole import CartPoleVectorEnv
-
-    angle, velocity, start = cartpole_grid(n)
-    envs = CartPoleVectorEnv(num_envs=n * n * rollouts, max_episode_steps=10**9)
-    envs.reset(seed=seed)
-    envs.state = np.repeat(start.T, rollouts, axis=1)  # each state `rollouts` times, in a row
-    rng, obs = np.random.default_rng(seed), envs.state.T.astype(np.float32)
-    alive, total, discount = np.ones(envs.num_envs, dtype=bool), np.zeros(envs.num_envs), 1.0
-    while alive.any() and discount >= 1e-3:
-        with torch.no_grad():
-            logits = logits_of(torch.as_tensor(obs, device=device))
-        probs = torch.softmax(logits.double(), -1).cpu().numpy()
-        action = (rng.random((len(probs), 1)) > probs.cumsum(1)).sum(1)  # a ~ pi(.|s)
-        obs, reward, terminated, _, _ = envs.step(np.minimum(action, probs.shape[1] - 1))
-        total += alive * discount * reward_scale * reward  # the step that ends still counts
-        alive &= ~terminated
-        discount *= gamma
-    envs.close()
-    return dict(angle=angle, velocity=velocity,
-                value=total.reshape(n * n, rollouts).mean(1).reshape(n, n))
-
-
-def draw_inside(run, nets, device, reward_scale):
-    """inside.png (plots.draw_inside): what the updates did and, on CartPole, V(s) and
-    pi(right|s) untrained and trained, the true V of the trained pi and the states visited,
-    also kept in maps.npz. `nets`: {"untrained"/"trained": (obs -> logits, obs -> V)}."""
-    cfg, maps = run.cfg, None
-    if cfg.env_id.startswith("CartPole"):
-        maps = {when: cartpole_maps(*fns, device) for when, fns in nets.items()}
-        maps["true"] = true = cartpole_true_values(nets["trained"][0], device, cfg.gamma,
-                                                   reward_scale, cfg.eval_seed)
-        maps["visited"] = visited = (np.concatenate(run.visited)[:, 2:4] if run.visited
-                                     else np.zeros((0, 2)))  # (pole angle, angular velocity)
+def draw_pictures(run, pictures, top, maps=None):
+    """curve.png (the panel `top`, then pictures["curve"]'s rows) and inside.png
+    (pictures["inside"]'s rows, then `maps`' row if there are maps, kept in maps.npz too).
+    Returns the two paths."""
+    logs = plots.load_logs(run.dir, getattr(run, "kept", ()), run.labels)
+    curve = plots.draw(run.dir, "curve.png", [[top], *pictures.get("curve", [])], logs,
+                       width=7, heights=[3.2] + [1.6] * len(pictures.get("curve", [])), dpi=90)
+    rows = list(pictures.get("inside", []))
+    if maps is not None:
+        rows.append([plots.maps_row(maps)])
         with common.written_whole(run.dir / "maps.npz") as tmp, open(tmp, "wb") as f:
             np.savez(f, **{f"{when}_{key}": maps[when][key] for when in ("untrained", "trained")
-                           for key in ("value", "right")},
-                     angle=maps["trained"]["angle"], velocity=maps["trained"]["velocity"],
-                     true_value=true["value"], true_angle=true["angle"],
-                     true_velocity=true["velocity"], visited=visited)
-    return plots.draw_inside(run.dir, run.script, asdict(cfg), run.kept, maps)
+                           for key in ("value", "policy")}, true_value=maps["true"]["value"],
+                     **{k: maps[k] for k in ("x", "y", "xlabel", "ylabel", "policy_label",
+                                             "true_x", "true_y", "visited")})
+    inside = plots.draw(run.dir, "inside.png", rows, logs) if rows else None
+    return curve, inside
 
 
-def finish_cartpole(run, threshold, nets, device, reward_scale):
-    """After a CartPole script's training: curve.png, inside.png (draw_inside's `nets`),
-    TensorBoard, two evaluations (actions drawn from pi, and pi's most probable action) and
-    the GIFs. Returns train()'s result: run_dir, solved, solved_step, global_step,
-    episode_returns, eval_returns, greedy_returns, interrupted."""
+def finish_updates(run, threshold, play, before, pictures, maps=None):
+    """After the training of a script that updates on batches: curve.png and inside.png
+    (draw_pictures; `maps`: None, or a function that makes the maps), TensorBoard, an
+    evaluation of each way of acting in `play` and the GIFs (before.gif: acting as `before`,
+    the untrained policy's `play`, does first). Returns train()'s result: run_dir, solved,
+    solved_step, global_step, episode_returns, the keys of `play`, interrupted."""
     cfg, run_dir, step = run.cfg, run.dir, run.global_step
     result = dict(run_dir=run_dir, solved=run.solved_step is not None,
                   solved_step=run.solved_step, global_step=step,
-                  episode_returns=[r for _, r in run.episodes], eval_returns=[],
-                  greedy_returns=[], interrupted=run.interrupted)
-    if run.interrupted:  # the curve so far and where everything is; main() exits with 130
+                  episode_returns=[r for _, r in run.episodes],
+                  **{key: [] for key, _, _ in play}, interrupted=run.interrupted)
+    top = plots.episode_returns(cfg.solved_window, threshold, run.solved_step)
+    if run.interrupted:  # the pictures so far and where everything is; main() exits with 130
         if cfg.curves and (run_dir / "progress.csv").exists():
-            with common.ctrl_c_deferred():  # a second Ctrl-C waits for the picture
-                plots.draw_run(run_dir, threshold, run.solved_step, cfg.solved_window)
+            with common.ctrl_c_deferred():  # a second Ctrl-C waits for the pictures
+                draw_pictures(run, pictures, top)
         print(f"\ninterrupted at step {step}: {run_dir} holds "
               f"{', '.join(sorted(f.name for f in run_dir.iterdir()))} "
               f"(replay: python {run.script}.py --eval {run_dir})", flush=True)
         return result
     elapsed = time.time() - run.start_time
-    print(f"trained {step} steps, {len(run.episodes)} episodes in {elapsed:.1f}s; "
+    short = cfg.total_timesteps - step if run.solved_step is None else 0
+    why = (f" (whole rollouts only: the last {short} steps of --total-timesteps "
+           f"{cfg.total_timesteps} make no whole one)" if short > 0 else "")
+    print(f"trained {step} steps{why}, {len(run.episodes)} episodes in {elapsed:.1f}s; "
           f"model: {run_dir / 'model.pt'}", flush=True)
     if cfg.curves:
         with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            curve = plots.draw_run(run_dir, threshold, run.solved_step, cfg.solved_window)
-            print(f"curve: {curve}\ninside: {draw_inside(run, nets, device, reward_scale)}",
-                  flush=True)
+            curve, inside = draw_pictures(run, pictures, top, maps and maps())
+            print(f"curve: {curve}\ninside: {inside}", flush=True)
     if cfg.tensorboard:
-        plots.to_tensorboard(run_dir, sps=step / elapsed)
-    # Two evaluations of the same episode seeds: actions drawn from pi, as in training (the
-    # policy that "solved" judged), and pi's most probable action (greedy). They can differ
-    # either way: a policy trained to be sampled need not be good when it is not.
-    n, seed, logits_of = cfg.eval_episodes, cfg.eval_seed, nets["trained"][0]
-    for key, greedy, what in (("eval_returns", False, "actions drawn from pi"),
-                              ("greedy_returns", True, "pi's most probable action")):
-        act = common.pi_actions(logits_of, device, seed, greedy=greedy)
-        result[key] = returns = common.evaluate(cfg.env_id, act, n, seed)
-        print(f"{'greedy ' if greedy else ''}evaluation over {n} episodes, {what}: mean "
+        plots.to_tensorboard(run_dir, sps=step / elapsed, tags=run.tags)
+    # The evaluations, each of the same episode seeds, one per way of acting
+    n, seed = cfg.eval_episodes, cfg.eval_seed
+    for i, (key, what, act_of) in enumerate(play):
+        result[key] = returns = common.evaluate(cfg.env_id, act_of(seed), n, seed)
+        print(f"{'greedy ' if i else ''}evaluation over {n} episodes, {what}: mean "
               f"{np.mean(returns):.1f}, min {min(returns):.0f}", flush=True)
-    if cfg.gifs:  # one episode each, drawn from pi: after.gif shows the evaluation's first
-        for name, when in (("before.gif", "untrained"), ("after.gif", "trained")):
-            act = common.pi_actions(nets[when][0], device, seed)  # every 2nd frame, half size
-            ret = common.record_gif(cfg.env_id, act, run_dir / name, seed, every=2, scale=2)
+    if cfg.gifs:  # one episode each, acting as play[0]: after.gif shows the evaluation's first
+        for name, act_of in (("before.gif", before[0][2]), ("after.gif", play[0][2])):
+            ret = common.record_gif(cfg.env_id, act_of(seed), run_dir / name, seed, **GIF)
             print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
     return result
 
@@ -156,105 +115,82 @@ def saved_model(result):
     return str(result["run_dir"])
 
 
-def after_evaluation(run, actor, best, device, info):
-    """DDPG's files at each evaluation: model.pt (the actor, `info` to rebuild it), and best.pt
-    and best.gif if it is the best so far; curve.png and inside.png redrawn; TensorBoard."""
-    cfg = run.cfg
-    checkpoints.save_model(run.dir / "model.pt", run.script, cfg, run.evaluations[-1][0],
-                           {"actor": actor}, **info)
+def after_evaluation(run, actor, best, device, info, pictures, gif=GIF):
+    """At each evaluation of a script that evaluates: model.pt (the actor, `info` to rebuild
+    it), and best.pt and best.gif if it is the best so far; curve.png and inside.png redrawn
+    (pictures: the script's panels, as for draw_pictures); TensorBoard."""
+    cfg, step = run.cfg, run.evaluations[-1]["global_step"]
+    checkpoints.save_model(run.dir / "model.pt", run.script, cfg, step, {"actor": actor}, **info)
     if best:
-        checkpoints.save_model(run.dir / "best.pt", run.script, cfg, run.evaluations[-1][0],
-                               {"actor": actor}, **info)
+        checkpoints.save_model(run.dir / "best.pt", run.script, cfg, step, {"actor": actor},
+                               **info)
         if cfg.gifs:
             common.record_gif(cfg.env_id, common.deterministic(actor, device),
-                              run.dir / "best.gif", cfg.eval_seed, **GIF, **CAMERA)
-    if cfg.curves:
-        plots.draw_run(run.dir)  # rewritten at every evaluation: open it any time
-        plots.draw_inside(run.dir, run.script, asdict(cfg))
+                              run.dir / "best.gif", cfg.eval_seed, **gif)
+    if cfg.curves:  # rewritten at every evaluation: open them any time
+        draw_pictures(run, pictures, plots.evaluation_returns())
     if cfg.tensorboard:
-        plots.to_tensorboard(run.dir, sps=run.timer["rate"])
-    run.clock_from(run.evaluations[-1][0])  # the next steps/s: learning, not this
+        plots.to_tensorboard(run.dir, sps=run.timer["rate"], tags=run.tags)
+    run.clock_from(step)  # the next steps/s: learning, not this
 
 
-def finish_walker(run, global_step, interrupted, untrained, actor, device):
-    """After DDPG's loop: where a stopped run is and how to go on, or the learning phase's
-    steps/s and the before/after GIFs. Returns train()'s result: run_dir, global_step,
-    evaluations, episodes, steps_per_second (learning phase) and interrupted."""
+def finish_evaluations(run, global_step, interrupted, untrained, actor, device, info, gif=GIF):
+    """After the loop of a script that evaluates: model.pt, the actor training ended with (at
+    a Ctrl-C too, beside the checkpoint); where a stopped run is and how to go on, or the
+    learning phase's steps/s and the before/after GIFs. Returns train()'s result: run_dir,
+    global_step, evaluations (evaluations.csv's rows), episodes, steps_per_second (learning
+    phase) and interrupted."""
     learned_from, since = run.timer.get("learning_since", (global_step, time.time()))
     learned = global_step - learned_from
     rate = learned / (time.time() - since) if learned > 0 else float("nan")
     result = dict(run_dir=run.dir, global_step=global_step, evaluations=run.evaluations,
                   episodes=run.episodes, steps_per_second=rate, interrupted=interrupted)
+    checkpoints.save_model(run.dir / "model.pt", run.script, run.cfg, global_step,
+                           {"actor": actor}, **info)
     if interrupted:
         path = run.dir / "checkpoint.pt"
         saved = (torch.load(path, weights_only=True, mmap=True)["global_step"]
                  if path.exists() else None)
         where = (f"its checkpoint is at step {saved}: continue with `python {run.script}.py "
                  f"--resume {run.dir}`" if saved else "no checkpoint was written yet")
-        print(f"interrupted at step {global_step}; {where} (before.gif and after.gif come "
-              f"when a run finishes; best.gif shows its best evaluation so far)", flush=True)
+        print(f"interrupted at step {global_step}; model.pt holds the actor of that step; "
+              f"{where} (before.gif and after.gif come when a run finishes; best.gif shows "
+              f"its best evaluation so far)", flush=True)
         return result
     print(f"learning phase: {learned} steps at {rate:.1f} steps/s (updates and evaluations "
-          f"included); run folder: {run.dir}", flush=True)
+          f"included); model: {run.dir / 'model.pt'} (step {global_step}); run folder: "
+          f"{run.dir}", flush=True)
     if run.cfg.gifs:
         for name, net in (("before.gif", untrained), ("after.gif", actor)):
             ret = common.record_gif(run.cfg.env_id, common.deterministic(net, device),
-                                    run.dir / name, run.cfg.eval_seed, **GIF, **CAMERA)
+                                    run.dir / name, run.cfg.eval_seed, **gif)
             print(f"{name}: return {ret:.0f} -> {run.dir / name}", flush=True)
     return result
 
 
-def play_policy(cfg, path, env_id, logits_of):
-    """--eval: play cfg.eval_episodes episodes of a saved CartPole policy (obs -> logits),
-    actions drawn from pi (in a window with --watch), then as many greedy ones; returns the
-    first ones' returns. With --gif: one episode, drawn as after.gif is, to that file."""
-    act = common.pi_actions(logits_of, "cpu", cfg.eval_seed)
+def play(cfg, path, env_id, ways, gif=GIF, watch=None):
+    """--eval: play cfg.eval_episodes episodes of a saved policy for each way of acting in
+    `ways` (as `play`), the first in a window with --watch (`watch`: env_id -> gym.make's
+    arguments for that window, if the env needs any); returns the first's returns. With
+    --gif: one episode, acting as the first does, to that file."""
+    what, act_of = ways[0][1], ways[0][2]
     if cfg.gif:
-        ret = common.record_gif(env_id, act, cfg.gif, cfg.eval_seed, every=2, scale=2)
-        print(f"{cfg.gif}: one episode, return {ret:.0f}", flush=True)
-        return [ret]
-    print(f"playing {cfg.eval_episodes} episodes of {env_id} with {path}"
-          + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
-    returns = common.evaluate(env_id, act, cfg.eval_episodes, cfg.eval_seed,
-                              render_mode="human" if cfg.watch else None, log=cfg.watch)
-    print(f"{env_id}, {path}: returns {[round(r) for r in returns]}, "
-          f"mean {np.mean(returns):.1f} (actions drawn from pi)", flush=True)
-    greedy = common.evaluate(env_id, common.pi_actions(logits_of, "cpu", cfg.eval_seed, True),
-                             cfg.eval_episodes, cfg.eval_seed)
-    print(f"greedy (pi's most probable action): returns {[round(r) for r in greedy]}, "
-          f"mean {np.mean(greedy):.1f}", flush=True)
-    return returns
-
-
-def play_actor(cfg, path, env_id, actor):
-    """--eval: play cfg.eval_episodes episodes of a saved DDPG actor without noise (in a window
-    with --watch, its camera following the agent), or with --gif one episode to that file."""
-    policy = common.deterministic(actor, torch.device("cpu"))
-    if cfg.gif:
-        print(f"recording one episode of {env_id} with {path} (up to a minute)", flush=True)
-        ret = common.record_gif(env_id, policy, cfg.gif, cfg.eval_seed, **GIF, **CAMERA)
+        print(f"recording one episode of {env_id} with {path} ({what})", flush=True)
+        ret = common.record_gif(env_id, act_of(cfg.eval_seed), cfg.gif, cfg.eval_seed, **gif)
         print(f"{cfg.gif}: one episode, return {ret:.1f}", flush=True)
         return [ret]
     print(f"playing {cfg.eval_episodes} episodes of {env_id} with {path}"
           + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
-    returns = common.evaluate(env_id, policy, cfg.eval_episodes, cfg.eval_seed,
-                              render_mode="human" if cfg.watch else None, log=cfg.watch,
-                              **(watch_camera(env_id) if cfg.watch else {}))
-    print(f"{env_id}, {path}: returns {[round(r, 1) for r in returns]}, "
-          f"mean {np.mean(returns):.1f}", flush=True)
-    return returns
-
-
-def watch_camera(env_id):
-    """gym.make arguments for --watch: the window's camera follows the agent. (The window
-    ignores camera_name; it takes the env's own view settings, here with a tracking type.)"""
-    import mujoco
-
-    with common.env_errors(env_id):
-        env = gym.make(env_id)
-    view = dict(env.unwrapped.mujoco_renderer.default_cam_config or {})
-    env.close()
-    return dict(default_camera_config={**view, "type": mujoco.mjtCamera.mjCAMERA_TRACKING})
+    first = None
+    for i, (_, what, act_of) in enumerate(ways):
+        shown = cfg.watch and i == 0
+        returns = common.evaluate(env_id, act_of(cfg.eval_seed), cfg.eval_episodes,
+                                  cfg.eval_seed, render_mode="human" if shown else None,
+                                  log=shown, **(watch(env_id) if shown and watch else {}))
+        print(f"{env_id}, {path}: returns {[round(r, 1) for r in returns]}, "
+              f"mean {np.mean(returns):.1f} ({what})", flush=True)
+        first = returns if first is None else first
+    return first
 
 
 def finish_grpo(run, samples, cfg):

@@ -31,21 +31,30 @@ def make_run_dir(root, script, env_id, seed):
 
 
 def append_csv(path, row):
-    """Append a dict as a CSV row (header first); one open per row: complete after Ctrl-C."""
+    """Append a dict as a CSV row (header first); one open per row: complete after Ctrl-C.
+    None (not measured) is written as nan. A row whose columns are not the file's header is
+    refused: a column cannot go missing from some rows."""
     new = not Path(path).exists()
+    if not new:
+        with open(path, newline="") as f:
+            header = next(csv.reader(f), [])
+        if header != list(row):
+            raise ValueError(f"{path}: a row with the columns {list(row)} under the header "
+                             f"{header}")
     with open(path, "a", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(row))
         if new:
             writer.writeheader()
-        writer.writerow({k: f"{v:.6g}" if isinstance(v, float) else v for k, v in row.items()})
+        writer.writerow({k: "nan" if v is None else f"{v:.6g}" if isinstance(v, float) else v
+                         for k, v in row.items()})
 
 
 def stop_if_diverged(step, losses, nets, run_dir=None, outputs=()):
     """nan or inf in `losses` (name -> number), in the weights of `nets` or in `outputs` (the
     networks' outputs on the next states): remove `run_dir`, raise one UserError naming the
     step and the likely cause."""
-    bad = [name for name, value in losses.items()
-           if np.ndim(value) == 0 and not np.isfinite(float(value))]  # arrays: kept for pictures
+    bad = [name for name, value in losses.items()  # None: not measured; arrays: for pictures
+           if value is not None and np.ndim(value) == 0 and not np.isfinite(float(value))]
     bad += [f"{type(net).__name__}'s weights" for net in nets
             if not all(bool(p.isfinite().all()) for p in net.parameters())]
     bad += ["the networks' output"] * (not all(bool(out.isfinite().all()) for out in outputs))
@@ -58,10 +67,10 @@ def stop_if_diverged(step, losses, nets, run_dir=None, outputs=()):
 
 
 def hours_minutes(seconds):
-    """5000 -> 'about 1 h 23 min', 90 -> 'about 2 min', 20 -> 'under a minute'."""
-    minutes = round(seconds / 60)
-    if minutes < 1:
+    """5000 -> 'about 1 h 23 min', 90 -> 'about 2 min', 50 -> 'under a minute'."""
+    if seconds < 60:  # not round(): 34 s would read "about 1 min" after "under a minute"
         return "under a minute"
+    minutes = round(seconds / 60)
     return (f"about {minutes // 60} h {minutes % 60:02d} min" if minutes >= 60
             else f"about {minutes} min")
 
@@ -71,14 +80,32 @@ def clock(seconds):
     return time.strftime("%H:%M:%S", time.gmtime(seconds)).lstrip("0").lstrip(":") or "0"
 
 
-class UpdateLog:
-    """A CartPole script's run folder: a progress.csv row per update, with a progress line
-    every print_every updates showing the numbers of `shown` ({column: format}); the finished
-    episodes (episodes.csv at the end) and the mean return of the last solved_window of them;
-    what inside.png draws (the updates' arrays, the states visited)."""
+# How many of the last finished episodes a progress line, evaluations.csv's
+# train_return_mean10 and its label average (the solved rule has its own --solved-window).
+RECENT = 10
 
-    def __init__(self, script, cfg, shown, task=None):
-        self.script, self.cfg, self.shown = script, cfg, shown
+
+def declared(logged, row, where):
+    """Check that `row`'s columns are the ones the script declared in `logged` (a column
+    written but not declared, or declared but not written, is the script's mistake)."""
+    if set(row) != set(logged):
+        raise ValueError(f"{where}: the script declares the columns {sorted(logged)} but "
+                         f"logged {sorted(row)}: declare each column once, log each one")
+
+
+class UpdateLog:
+    """A run folder of a script that updates on batches: a progress.csv row per update, with
+    a progress line every print_every updates; the finished episodes (episodes.csv at the end)
+    and the mean return of the last solved_window of them; what inside.png draws (the updates'
+    arrays, the states visited). `logged`: the script's declaration of what each update logs,
+    {column: (format on the progress line or None: only in the CSV, what it is (the pictures'
+    label)[, its TensorBoard tag])}; a value of
+    None is "not measured at this update" (an empty cell, left out of the line)."""
+
+    def __init__(self, script, cfg, logged, task=None):
+        self.script, self.cfg, self.logged = script, cfg, logged
+        self.labels = {column: spec[1] for column, spec in logged.items()}
+        self.tags = {column: spec[2] for column, spec in logged.items() if len(spec) > 2}
         self.window = getattr(cfg, "solved_window", None)  # none: no episodes to average
         self.start_time = time.time()
         self.dir = make_run_dir(cfg.run_dir, script, task or cfg.env_id, cfg.seed)
@@ -119,21 +146,21 @@ class UpdateLog:
     def update(self, stats, visited=None, show=False, **columns):
         """After an update: its progress.csv row (the step, episodes, recent return, `columns`,
         then the numbers of `stats`; its arrays are kept for inside.png), and every print_every
-        updates (and after the first, and where `show`) a progress line, without the numbers
-        not measured at this update (nan). `visited`: the batch's observations, the last 10
-        batches' are marked on inside.png's maps."""
+        updates (and after the first, and where `show`) a progress line of the declared
+        formats, without the numbers not measured at this update (None). `visited`: the
+        batch's observations, the last 10 batches' are marked on inside.png's maps."""
         self.updates += 1
         if visited is not None:
             self.visited = [*self.visited[-9:], visited.detach().cpu().numpy()]
         arrays = {k: v.detach().cpu().numpy() for k, v in stats.items() if torch.is_tensor(v)}
         self.stats = {k: v for k, v in stats.items() if k not in arrays}
+        declared(self.logged, {**columns, **self.stats}, "progress.csv")
         self.kept.append((self.global_step, arrays))
         self.row(**columns, **self.stats)
         if self.updates % self.cfg.print_every == 0 or self.updates == 1 or show:
             elapsed, shown = time.time() - self.start_time, {**columns, **self.stats}
-            numbers = "  ".join(f"{key.replace('_', ' ') if key == 'running_reward' else key} "
-                                f"{shown[key]:{form}}" for key, form in self.shown.items()
-                                if key in shown and not np.isnan(shown[key]))
+            numbers = "  ".join(f"{key} {shown[key]:{spec[0]}}" for key, spec in
+                                self.logged.items() if spec[0] and shown[key] is not None)
             recent = f"return({self.window}) {self.recent_return():6.1f}  " if self.window else ""
             print(f"step {self.global_step:>7}  {self.global_step / elapsed:6.0f} steps/s  "
                   f"{recent}{numbers}  {elapsed:.1f}s", flush=True)
@@ -148,8 +175,8 @@ class UpdateLog:
 
     def stopped_row(self, **columns):
         """progress.csv's last row, where training stopped inside a rollout: no update, so its
-        update numbers are nan."""
-        self.row(**columns, **dict.fromkeys(self.stats, float("nan")))
+        update numbers are empty (not measured)."""
+        self.row(**columns, **dict.fromkeys(self.stats))
 
     @contextlib.contextmanager
     def saving_model(self, nets, **info):
@@ -172,14 +199,22 @@ class UpdateLog:
 
 
 class EvaluationLog:
-    """DDPG's run folder: episodes.csv as episodes end, evaluations.csv, progress lines with
-    steps/s of learning and the time left. With cfg.resume, the folder of that run; its
-    state_dict() goes into checkpoint.pt, load_state_dict() rewinds the logs to it."""
+    """The run folder of a script that evaluates every so many env steps: episodes.csv as
+    episodes end, evaluations.csv (a row per evaluation: its mean and std, the training
+    return before it, then the script's own columns, declared once in `logged` as for
+    UpdateLog), progress lines with steps/s of learning (from step `learning_starts` on) and
+    the time left. With cfg.resume, the folder of that run; its state_dict() goes into
+    checkpoint.pt (every row as written), load_state_dict() rewinds the logs to it.
+    `shipped`: a trained model of the script to point to while this one trains, if any."""
 
-    def __init__(self, script, cfg, device):
-        self.script, self.cfg = script, cfg
-        self.episodes, self.evaluations = [], []  # (step, return); (step, mean, std)
-        self.inside = []  # per evaluation: (mean Q(s, mu(s)), mean discounted return, states)
+    def __init__(self, script, cfg, device, logged, learning_starts, eval_every, shipped=None):
+        self.script, self.cfg, self.logged = script, cfg, logged
+        self.learning_starts = learning_starts
+        self.labels = {"eval_mean": "evaluation: mean return, no noise",
+                       "train_return_mean10": f"training: mean of the last {RECENT} episodes",
+                       **{column: spec[1] for column, spec in logged.items()}}
+        self.tags = {column: spec[2] for column, spec in logged.items() if len(spec) > 2}
+        self.episodes, self.evaluations = [], []  # (step, return); evaluations.csv's rows
         now = time.time()
         self.timer = dict(start=now, step=0, time=now, rate=float("nan"))
         if cfg.resume:
@@ -187,15 +222,14 @@ class EvaluationLog:
             return
         self.dir = make_run_dir(cfg.run_dir, script, cfg.env_id, cfg.seed)
         print(f"run folder: {self.dir}  (device: {device})", flush=True)
-        first = max(cfg.eval_every * (cfg.start_steps // cfg.eval_every + 1), cfg.eval_every)
-        warm_up = (f"once in the warm-up (step {cfg.eval_every}), then "
-                   if cfg.eval_every <= cfg.start_steps else "")
+        first = max(eval_every * (learning_starts // eval_every + 1), eval_every)
+        warm_up = (f"once in the warm-up (step {eval_every}), then "
+                   if eval_every <= learning_starts else "")
         print(f"curve.png there is redrawn at every evaluation: {warm_up}from step {first} "
-              f"on, every {cfg.eval_every} steps", flush=True)
-        shipped = Path(__file__).resolve().parent / "docs" / f"{script}2d.pt"
-        if cfg.env_id == "Walker2d-v5" and shipped.exists():
-            print(f"meanwhile, a trained walker (a 1M-step run's best actor): python "
-                  f"{script}.py --eval {shipped} --gif {script}.gif (or --watch)", flush=True)
+              f"on, every {eval_every} steps", flush=True)
+        if shipped is not None and Path(shipped).exists():
+            print(f"meanwhile, a trained one: python {script}.py --eval {shipped} --gif "
+                  f"{script}.gif (or --watch)", flush=True)
 
     def episode_ended(self, step, episode_return):
         self.episodes.append((step, float(episode_return)))
@@ -204,7 +238,7 @@ class EvaluationLog:
     def progress(self, step, losses, nets):
         """Every print_every steps a progress line, after a check that the losses and `nets`
         are finite (nan or inf: one line, and a run without a checkpoint is removed)."""
-        if step > self.cfg.start_steps:  # steps/s of learning: from this process's first update
+        if step > self.learning_starts:  # steps/s of learning: from this process's first update
             self.timer.setdefault("learning_since", (step, time.time()))
         if step % self.cfg.print_every:
             return
@@ -216,17 +250,17 @@ class EvaluationLog:
         # steps/s of learning since the last line (or since learning began, if it was later)
         since_step, since = max((timer["step"], timer["time"]),
                                 timer.get("learning_since", (step, 0)))
-        if step > cfg.start_steps and step > since_step:
+        if step > self.learning_starts and step > since_step:
             timer["rate"] = (step - since_step) / (now - since)
             left = (cfg.total_timesteps - step) / timer["rate"]
             speed = f"{timer['rate']:5.0f} steps/s  {hours_minutes(left)} to go"
         else:
-            speed = "learning starts" if step > cfg.start_steps else "warm-up (random actions)"
-        recent = (f"{np.mean([r for _, r in self.episodes[-10:]]):8.1f}" if self.episodes
+            speed = "learning starts" if step > self.learning_starts else "warm-up (random actions)"
+        recent = (f"{np.mean([r for _, r in self.episodes[-RECENT:]]):8.1f}" if self.episodes
                   else "     n/a")
         loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
                      if losses is not None else "")
-        print(f"step {step:>8}  {speed}  return(10) {recent}{loss_text}  "
+        print(f"step {step:>8}  {speed}  return({RECENT}) {recent}{loss_text}  "
               f"{clock(now - timer['start'])}", flush=True)
         self.clock_from(step)
 
@@ -234,35 +268,36 @@ class EvaluationLog:
         """The next progress line's steps/s counts from here (not an evaluation or a write)."""
         self.timer.update(step=step, time=time.time())
 
-    def evaluation(self, step, returns, inside):
-        """An evaluation's row in evaluations.csv, with the critic's Q(s, mu(s)) against the
-        discounted return (`inside`: common.q_against_return's three numbers). Returns whether
+    def evaluation(self, step, returns, **columns):
+        """An evaluation's row in evaluations.csv: the mean and std of its `returns`, the
+        training return before it, then the script's `columns` (as declared). Returns whether
         it is the best so far."""
         mean, std = float(np.mean(returns)), float(np.std(returns))
-        best = mean > max((m for _, m, _ in self.evaluations), default=-float("inf"))
-        self.evaluations.append((step, mean, std))
-        self.inside.append(inside)
-        append_csv(self.dir / "evaluations.csv", evaluation_row(self.evaluations[-1],
-                                                                self.episodes, inside))
+        best = mean > max((e["eval_mean"] for e in self.evaluations), default=-float("inf"))
+        declared(self.logged, columns, "evaluations.csv")
+        done = [ret for s, ret in self.episodes if s <= step]
+        self.evaluations.append(dict(
+            global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
+            train_return_mean10=float(np.mean(done[-RECENT:])) if done else float("nan"),
+            **columns))
+        append_csv(self.dir / "evaluations.csv", self.evaluations[-1])
         print(f"evaluation at step {step}: {mean:.1f} +- {std:.1f} over {len(returns)} "
               f"episodes", flush=True)
         return best
 
     def state_dict(self):
-        return dict(episodes=self.episodes, evaluations=self.evaluations, inside=self.inside,
+        return dict(episodes=self.episodes, evaluations=self.evaluations,
                     elapsed=time.time() - self.timer["start"])
 
     def load_state_dict(self, state):
         """The logs as they were at the checkpoint: rows a killed run wrote after it go (the
         resumed run writes them again, identically); the run's clock goes on from there."""
         self.episodes[:], self.evaluations[:] = state["episodes"], state["evaluations"]
-        self.inside[:] = state["inside"]
         self.timer["start"] -= state["elapsed"]
         for stale in self.dir.glob("*.tmp*"):  # a write that a kill cut short
             stale.unlink()
         for name, rows in (("episodes.csv", [episode_row(*e) for e in self.episodes]),
-                           ("evaluations.csv", [evaluation_row(e, self.episodes, q)
-                                                for e, q in zip(self.evaluations, self.inside)])):
+                           ("evaluations.csv", self.evaluations)):
             (self.dir / name).unlink(missing_ok=True)
             for row in rows:
                 append_csv(self.dir / name, row)
@@ -271,14 +306,3 @@ class EvaluationLog:
 def episode_row(step, ep_return):
     """An episodes.csv row, as every script writes it."""
     return {"global_step": step, "return": ep_return}
-
-
-def evaluation_row(evaluation, episodes, inside):
-    """An evaluations.csv row: the evaluation, the training return before it, and the critic's
-    estimate against the return (`inside`: common.q_against_return's three numbers)."""
-    step, mean, std = evaluation
-    done = [ret for s, ret in episodes if s <= step]
-    q, g, n = inside
-    return dict(global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
-                train_return_mean10=float(np.mean(done[-10:])) if done else float("nan"),
-                q_estimate=q, discounted_return=g, q_states=n)

@@ -14,6 +14,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import ddpg_walker  # noqa: E402
 import plots  # noqa: E402
 
 
@@ -56,7 +57,9 @@ def draw_q_against_return(path, upto=200_000):
     for ax, (name, csv_path) in zip(axes, runs.items()):
         table = plots.read_csv(csv_path)
         keep = table["global_step"] <= upto
-        plots.overestimation(ax, {k: v[keep] for k, v in table.items()})
+        table = {k: v[keep] for k, v in table.items()}
+        labels = {k: what for k, (_, what) in ddpg_walker.LOGGED.items()}
+        plots.lines("q_estimate", "discounted_return")[1]([ax], dict(table=table, labels=labels))
         for line in ax.get_lines():
             line.set_marker(".")  # one point per evaluation; none during the warm-up
         ax.axvspan(0, 25_000, color="gray", alpha=0.12, label="random warm-up")

@@ -116,7 +116,8 @@ def test_eval_reloads_the_saved_model(script, tmp_path):
     net, env_id = checkpoints.load_model(cfg.eval, script.SCRIPT, key, lambda c: cls(
         c["obs_dim"], c["n_actions"], c["config"]["hidden"]))
     logits_of = net if key == "policy" else (lambda x: net(x)[0])
-    assert report.play_policy(cfg, cfg.eval, env_id, logits_of) == result["eval_returns"]
+    play = report.sampled_and_greedy(logits_of, "cpu")
+    assert report.play(cfg, cfg.eval, env_id, play) == result["eval_returns"]
     # The run folder stands for its model.pt.
     p = run_script(f"{script.__name__}.py", "--eval", result["run_dir"], "--eval-episodes", 4)
     assert p.returncode == 0, p.stderr

@@ -16,6 +16,7 @@ import ddpg_walker as ddpg
 import checkpoints
 import report
 import runlog
+import mujoco_env
 from common import UserError
 from conftest import IN_A_PROCESS, ROOT, interrupt, run_main, run_script
 
@@ -26,7 +27,8 @@ def play(path, episodes, script=ddpg):
     cfg = script.Config(eval=str(path), eval_episodes=episodes)
     actor, env_id = checkpoints.load_model(cfg.eval, script.SCRIPT, "actor", lambda c: script.Actor(
         c["obs_dim"], c["act_dim"], c["config"]["hidden"], np.array(c["low"]), np.array(c["high"])))
-    return report.play_actor(cfg, cfg.eval, env_id, actor)
+    mu = [("eval_returns", "mu(s), no noise", lambda _: common.deterministic(actor, "cpu"))]
+    return report.play(cfg, cfg.eval, env_id, mu)
 
 
 @pytest.mark.quick
@@ -170,12 +172,12 @@ def test_the_warm_up_is_evaluated_once_then_every_eval_every(tmp_path, capsys):
     result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1500,
                               start_steps=1000, eval_every=250, eval_episodes=1, gifs=False,
                               curves=False))
-    assert [s for s, _, _ in result["evaluations"]] == [250, 1250, 1500]
+    assert [e["global_step"] for e in result["evaluations"]] == [250, 1250, 1500]
     assert "once in the warm-up (step 250), then from step 1250 on" in capsys.readouterr().out
     result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1500,
                               start_steps=1000, eval_every=1250, eval_episodes=1, gifs=False,
                               curves=False))
-    assert [s for s, _, _ in result["evaluations"]] == [1250]
+    assert [e["global_step"] for e in result["evaluations"]] == [1250]
     out = capsys.readouterr().out
     assert "from step 1250 on, every 1250 steps" in out and "warm-up" not in out.split("\n")[1]
 
@@ -196,7 +198,7 @@ def test_watch_window_follows_the_agent():
     on top of the env's own view settings."""
     import mujoco
 
-    kw = report.watch_camera("Walker2d-v5")["default_camera_config"]
+    kw = mujoco_env.watch_camera("Walker2d-v5")["default_camera_config"]
     assert kw["type"] == mujoco.mjtCamera.mjCAMERA_TRACKING and kw["distance"] == 4.0
 
 
@@ -232,7 +234,7 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
     assert torch.load(run / "checkpoint.pt", weights_only=True)["global_step"] == 600
     # --eval replays the saved actor: same returns as the last evaluation.
     returns = play(str(run / "model.pt"), 2)
-    assert np.mean(returns) == pytest.approx(result["evaluations"][-1][1])
+    assert np.mean(returns) == pytest.approx(result["evaluations"][-1]["eval_mean"])
 
 
 @pytest.mark.quick
@@ -245,12 +247,12 @@ def test_quick_smoke_run_writes_its_files_and_replays(tmp_path):
     assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",
                                                "best.gif", "curve.png", "inside.png", "before.gif", "after.gif",
                                                "checkpoint.pt"}
-    assert [s for s, _, _ in result["evaluations"]] == [150, 300]
+    assert [e["global_step"] for e in result["evaluations"]] == [150, 300]
     from test_cartpole_scripts import assert_curve_drawn
     assert_curve_drawn(run / "inside.png")
     row = list(csv.DictReader(open(run / "evaluations.csv")))[-1]
     assert int(row["q_states"]) > 0 and float(row["discounted_return"]) > 0
-    assert play(run / "model.pt", 1) == [result["evaluations"][-1][1]]
+    assert play(run / "model.pt", 1) == [result["evaluations"][-1]["eval_mean"]]
 
 
 @pytest.mark.parametrize("env_id", ["Hopper-v5", "HalfCheetah-v5", "InvertedPendulum-v5"])
@@ -279,13 +281,14 @@ def test_curve_is_redrawn_at_every_evaluation(tmp_path, monkeypatch):
     from test_cartpole_scripts import assert_curve_drawn
 
     seen = []
-    real_draw = report.plots.draw_run
+    real_draw = report.plots.draw
 
-    def draw(run_dir, *args):
-        path = real_draw(run_dir, *args)
-        seen.append(path.read_bytes())
+    def draw(run_dir, name, *args, **kw):
+        path = real_draw(run_dir, name, *args, **kw)
+        if name == "curve.png":
+            seen.append(path.read_bytes())
         return path
-    monkeypatch.setattr(report.plots, "draw_run", draw)
+    monkeypatch.setattr(report.plots, "draw", draw)
     result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=900,
                               start_steps=300, eval_every=300, eval_episodes=1, gifs=False))
     assert len(seen) == 3 and len(set(seen)) == 3  # one new picture per evaluation
@@ -311,7 +314,7 @@ def test_the_camera_follows_the_walker():
         env.close()
         return counts
 
-    start, moved = walker_pixels(**report.CAMERA)
+    start, moved = walker_pixels(camera_name=mujoco_env.GIF["camera_name"])
     assert start > 500 and moved > 0.5 * start
     assert walker_pixels()[1] < 50  # the default camera lost it: the test can tell
 
@@ -420,7 +423,7 @@ def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbro
     with pytest.raises(UserError, match="--actor-lr 0.001 differs from the saved 0.0003"):
         ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700, actor_lr=1e-3))
     result = ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))
-    assert [s for s, _, _ in result["evaluations"]][-2:] == [2400, 2700]
+    assert [e["global_step"] for e in result["evaluations"]][-2:] == [2400, 2700]
     ckpt = torch.load(run / "checkpoint.pt", weights_only=True)
     assert ckpt["global_step"] == 2700 and ckpt["config"]["hidden"] == 64  # the saved settings
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 
+import cartpole_env
 import ppo_cartpole as ppo
 from conftest import ROOT, run_script
 from test_cartpole_scripts import assert_curve_drawn
@@ -130,7 +131,7 @@ def test_ctrl_c_while_curve_png_is_written_keeps_the_old_one_and_no_tmp(tmp_path
         raise KeyboardInterrupt  # ...when Ctrl-C lands
     monkeypatch.setattr(Figure, "savefig", interrupted_savefig)
     with pytest.raises(KeyboardInterrupt):
-        plots.draw_run(run)
+        plots.draw(run, "curve.png", [[plots.episode_returns(20)]], plots.load_logs(run))
     assert (run / "curve.png").read_bytes() == before
     assert not list(run.glob("*.tmp*"))
 
@@ -148,7 +149,7 @@ def test_maps_of_several_runs_side_by_side(tmp_path):
             run_dir=str(tmp_path / name), total_timesteps=1024, stop_when_solved=False,
             gifs=False, eval_episodes=1, print_every=10**6))["run_dir"])
         maps = np.load(runs[-1] / "maps.npz")
-        assert maps["trained_value"].shape == maps["untrained_right"].shape == (41, 41)
+        assert maps["trained_value"].shape == maps["untrained_policy"].shape == (41, 41)
     out = tmp_path / "maps.png"
     p = run_script("plots.py", "--maps", *runs, "--out", out)
     assert p.returncode == 0, p.stderr
@@ -189,11 +190,11 @@ def brute_force_value(angle, velocity, gamma, scale):
 
 
 def test_true_value_map_is_the_brute_force_rollout_at_each_state():
-    """report.cartpole_true_values against a hand-written rollout in the single env, at
+    """cartpole_env.cartpole_true_values against a hand-written rollout in the single env, at
     the grid's corners (one step from failure) and its centre (balanced to the horizon)."""
     import report
 
-    true = report.cartpole_true_values(Lean(), "cpu", 0.99, 0.05, seed=0, n=3, rollouts=2)
+    true = cartpole_env.cartpole_true_values(Lean(), "cpu", 0.99, 0.05, seed=0, n=3, rollouts=2)
     assert true["angle"].tolist() == [-0.21, 0.0, 0.21]
     for i, velocity in enumerate(true["velocity"]):
         for j, angle in enumerate(true["angle"]):

@@ -3,18 +3,25 @@ import each other (directly or round a longer circle), and importing any of them
 order, changes nothing in the process (no signal handler, no environment variable)."""
 
 import ast
+import dataclasses
+import importlib
+import io
 import os
+import re
 import subprocess
 import sys
+import tokenize
+from collections import Counter
 
 import pytest
 
 from conftest import ROOT
+from test_every_script import SCRIPTS
 
 TOOLS = ("common", "cli", "runlog", "checkpoints", "report", "plots")
-SCRIPTS = ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole", "ddpg_walker",
-           "td3_walker")
-MODULES = TOOLS + SCRIPTS
+ENV_HELPERS = ("cartpole_env", "mujoco_env")  # what belongs to an env, named for it
+SCRIPTS = tuple(SCRIPTS)  # found by themselves: every top-level *.py with a train()
+MODULES = TOOLS + ENV_HELPERS + SCRIPTS
 
 
 def project_imports(name):
@@ -41,7 +48,50 @@ def test_common_is_the_ground_floor_and_there_is_no_import_circle():
             if other not in seen:
                 seen.add(other)
                 todo += graph[other]
-    assert not any(graph[tool] & set(SCRIPTS) for tool in TOOLS)  # no tool knows a script
+    assert not any(graph[tool] & set(SCRIPTS + ENV_HELPERS) for tool in TOOLS)  # nor an env
+
+
+def script_only(kind):
+    """The names of `kind` ("fields": a Config's own fields; "columns": its declared LOGGED
+    columns) that exactly one script has."""
+    counts = Counter()
+    for name in SCRIPTS:
+        module = importlib.import_module(name)
+        if kind == "fields":
+            shared = {f.name for base in module.Config.__mro__[1:] if dataclasses.is_dataclass(base)
+                      for f in dataclasses.fields(base)}
+            counts.update({f.name for f in dataclasses.fields(module.Config)} - shared)
+        else:
+            counts.update(set(getattr(module, "LOGGED", {})))
+    import common  # ratio_stats' columns are common's own, whoever logs them
+    return {name for name, n in counts.items() if n == 1} - set(common.RATIO_COLUMNS)
+
+
+def words(tool):
+    """A tool's code as (attribute names, string literals, every word of its text)."""
+    text = (ROOT / f"{tool}.py").read_text(encoding="utf-8")
+    tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))
+    attributes = {b.string for a, b in zip(tokens, tokens[1:])
+                  if a.string == "." and b.type == tokenize.NAME}
+    strings = {t.string.strip("'\"rbf") for t in tokens if t.type == tokenize.STRING}
+    return attributes, strings, text
+
+
+@pytest.mark.quick
+def test_no_tool_names_a_script_an_env_or_what_only_one_script_has():
+    """The tools take data and functions from the scripts: no script's name, no env id, no
+    field of one script's Config read as cfg.<field>, no column that only one script logs."""
+    fields, columns = script_only("fields"), script_only("columns")
+    assert "d_targ" in fields and "explained_var" in columns  # the check sees them
+    for tool in TOOLS:
+        attributes, strings, text = words(tool)
+        named = [s for s in SCRIPTS if re.search(rf"\b{s}\b", text)]
+        assert not named, f"{tool}.py names the script(s) {named}"
+        envs = re.findall(r"\b[A-Z][A-Za-z0-9]*-v\d+\b", text)
+        assert not envs, f"{tool}.py names env ids {envs}"
+        assert not attributes & fields, f"{tool}.py reads {sorted(attributes & fields)}"
+        assert not strings & columns, f"{tool}.py names the columns {sorted(strings & columns)}"
+        assert not strings & fields, f"{tool}.py names the fields {sorted(strings & fields)}"
 
 
 CHECK = """

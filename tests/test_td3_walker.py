@@ -112,8 +112,8 @@ def test_learns_inverted_pendulum_with_a_fixed_seed(tmp_path):
                      critic_lr=1e-3, tau=0.01, seed=0, print_every=10**6, gifs=False,
                      curves=False, run_dir=str(tmp_path))
     evaluations = td3.train(cfg)["evaluations"]
-    assert evaluations[0][1] < 200  # the pole falls
-    assert evaluations[-1][1] >= 900, evaluations  # near the maximum of 1000
+    assert evaluations[0]["eval_mean"] < 200  # the pole falls
+    assert evaluations[-1]["eval_mean"] >= 900, evaluations  # near the maximum of 1000
 
 
 def test_help_shows_the_three_fixes():

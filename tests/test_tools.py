@@ -18,17 +18,18 @@ import cli
 import common
 import report
 import runlog
+import cartpole_env
 from common import UserError
 from conftest import run_script
 
 
-def a_run(tmp_path, threshold, **flags):
+def a_run(tmp_path, threshold, logged=None, **flags):
     cfg = dataclasses.make_dataclass("Cfg", [("env_id", str, "CartPole-v1"), ("seed", int, 0),
                                       ("num_envs", int, 4), ("num_steps", int, 8),
                                       ("total_timesteps", int, 1000)],
                                      bases=(cli.SolvedFlags,))(
         **{"run_dir": str(tmp_path), "stop_when_solved": False, **flags})
-    return runlog.UpdateLog("test", cfg, shown={})
+    return runlog.UpdateLog("test", cfg, logged or {})
 
 
 @pytest.mark.quick
@@ -64,7 +65,8 @@ def test_the_runs_episodes_and_solved_step_match_hand_kept_returns(tmp_path):
 def test_the_runs_progress_rows_and_the_last_row_at_a_stop(tmp_path):
     """update() writes the step, episodes, mean of the last 20, the extra columns, then the
     stats; a stop writes one more row with the stats as nan and the rest as they are now."""
-    run = a_run(tmp_path, threshold=10.0, stop_when_solved=True)
+    logged = {k: (None, k) for k in ("running_reward", "lr", "loss_pi", "loss_v")}
+    run = a_run(tmp_path, threshold=10.0, logged=logged, stop_when_solved=True)
     run.episodes = [(i, 12.0) for i in range(20)]
     run.global_step = 64
     run.update(dict(loss_pi=0.5, loss_v=0.25), running_reward=3.0, lr=0.001)
@@ -422,7 +424,7 @@ def test_cartpole_maps_are_the_networks_at_grid_points():
     torch.manual_seed(0)
     policy, value = torch.nn.Linear(4, 2), torch.nn.Sequential(torch.nn.Linear(4, 1),
                                                                  torch.nn.Flatten(0))
-    maps = report.cartpole_maps(policy, value, "cpu", n=5)
+    maps = cartpole_env.cartpole_maps(policy, value, "cpu", n=5)
     for i, j in ((0, 0), (2, 3), (4, 1)):  # row: angular velocity, column: pole angle
         obs = torch.tensor([[0.0, 0.0, maps["angle"][j], maps["velocity"][i]]], dtype=torch.float32)
         with torch.no_grad():

@@ -1,0 +1,73 @@
+"""What belongs to MuJoCo rather than to a script: its envs' whole state for an exact
+--resume (MujocoEnvState), the GIFs' and the window's camera that follows the agent, and
+the check that an env id is a MuJoCo one. The MuJoCo scripts hand these to the tools.
+"""
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+import cli
+import common
+
+# GIFs look through the model's "track" camera, which follows the walker (gymnasium's
+# default free camera stays put, and a walking agent leaves the picture). Models without
+# such a camera (InvertedPendulum) keep the default view. 1000 steps -> every 4th frame,
+# 250 frames, at half size: a GIF of a few MB.
+GIF = dict(max_frames=250, every=4, scale=2, camera_name="track")
+
+
+class MujocoEnvState:
+    """A MuJoCo env mid-episode as a state_dict(): the simulator's whole state (positions,
+    velocities, the solver's warm start), the generator used at reset, and the wrappers'
+    counters (the time limit's steps, the episode's return and length so far)."""
+
+    COUNTERS = ("_elapsed_steps", "episode_returns", "episode_lengths")
+
+    def __init__(self, env):
+        self.env = env
+
+    def state_dict(self):
+        import mujoco
+
+        sim, what = self.env.unwrapped, mujoco.mjtState.mjSTATE_INTEGRATION
+        state = np.empty(mujoco.mj_stateSize(sim.model, what))
+        mujoco.mj_getState(sim.model, sim.data, state, what)
+        return dict(mujoco=torch.from_numpy(state), rng=sim.np_random.bit_generator.state,
+                    **{name: float(self.env.get_wrapper_attr(name)) if name == "episode_returns"
+                       else int(self.env.get_wrapper_attr(name)) for name in self.COUNTERS})
+
+    def load_state_dict(self, saved):
+        import mujoco
+
+        sim = self.env.unwrapped
+        mujoco.mj_setState(sim.model, sim.data, saved["mujoco"].numpy(),
+                           mujoco.mjtState.mjSTATE_INTEGRATION)
+        sim.np_random.bit_generator.state = saved["rng"]
+        for name in self.COUNTERS:
+            self.env.set_wrapper_attr(name, saved[name])
+
+
+def watch_camera(env_id):
+    """gym.make arguments for --watch: the window's camera follows the agent. (The window
+    ignores camera_name; it takes the env's own view settings, here with a tracking type.)"""
+    import mujoco
+
+    with common.env_errors(env_id):
+        env = gym.make(env_id)
+    view = dict(env.unwrapped.mujoco_renderer.default_cam_config or {})
+    env.close()
+    return dict(default_camera_config={**view, "type": mujoco.mjtCamera.mjCAMERA_TRACKING})
+
+
+def check_mujoco(env_id):
+    """A gymnasium env that is not a MuJoCo one is refused (from its registration; no env is
+    made). Other ids: train() says what is wrong with them."""
+    try:
+        entry = gym.spec(env_id).entry_point
+    except gym.error.Error:
+        return  # unknown: train() says so, with gymnasium's suggestion
+    if isinstance(entry, str) and entry.startswith("gymnasium.envs."):
+        cli.check(entry.startswith("gymnasium.envs.mujoco"),
+                  f"{env_id} is not a MuJoCo env; this script trains MuJoCo tasks (Walker2d-v5, "
+                  "Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5, ...)")

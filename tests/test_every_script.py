@@ -1,0 +1,115 @@
+"""The checks every algorithm script gets without being listed: a top-level *.py with a
+`def train(` is a script, found here by itself. Each declares SMOKE, the Config overrides of
+a run of seconds that still writes every file, and gets: --help, one-line errors for bad
+input, its smoke run (files written, pictures drawn, --eval replays it), the same seed giving
+the same logs, and Ctrl-C ending in one line with exit 130 and its files kept.
+
+A new script is one new file: if it crashes while drawing, forgets to declare SMOKE or a
+column, or leaves a *.tmp behind, these tests fail in the quick layer (pytest -m quick).
+"""
+
+import dataclasses
+import importlib
+
+import imageio.v3 as iio
+import pytest
+
+from conftest import ROOT, interrupt, run_main
+
+SCRIPTS = sorted(p.stem for p in ROOT.glob("*.py") if "\ndef train(" in p.read_text("utf-8"))
+LOGS = ("progress.csv", "evaluations.csv", "episodes.csv")
+
+
+@pytest.fixture(params=SCRIPTS)
+def script(request):
+    return importlib.import_module(request.param)
+
+
+def smoke(module, tmp_path, **more):
+    assert hasattr(module, "SMOKE"), (f"{module.__name__}.py declares no SMOKE: the Config "
+                                      "overrides of a run of seconds that writes every file")
+    return module.Config(**{**module.SMOKE, "run_dir": str(tmp_path), "print_every": 10**6,
+                            **more})
+
+
+def as_flags(overrides):
+    """Config overrides as the command line's flags."""
+    flags = []
+    for name, value in overrides.items():
+        flag = "--" + name.replace("_", "-")
+        if isinstance(value, bool):
+            flags.append(flag if value else flag.replace("--", "--no-", 1))
+        else:
+            flags += [flag, str(value)]
+    return flags
+
+
+def not_blank(path):
+    """A PNG whose plot area holds more than the background and the axes."""
+    image = iio.imread(path)[..., :3].astype(int)
+    colours = {tuple(c) for c in image.reshape(-1, 3)[::7]}
+    return image.shape[0] > 100 and image.shape[1] > 100 and len(colours) > 20
+
+
+def test_the_scripts_are_found():
+    assert {"ppo_cartpole", "ddpg_walker", "grpo_addition"} <= set(SCRIPTS)
+    assert not {"common", "cli", "runlog", "report", "plots", "checkpoints"} & set(SCRIPTS)
+
+
+@pytest.mark.quick
+def test_help_lists_the_scripts_own_flags_first(script, capsys):
+    p = run_main(f"{script.__name__}.py", "--help", capsys=capsys)
+    assert p.returncode == 0 and "--seed" in p.stdout and "--run-dir" in p.stdout
+    own = [f.name for f in dataclasses.fields(script.Config)
+           if f.name in vars(script.Config).get("__annotations__", {})]
+    at = [p.stdout.index("--" + name.replace("_", "-") + " ") for name in own[:2]]
+    assert at and max(at) < p.stdout.index("--run-dir")
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("flags, needle", [
+    (["--seed", "x"], "invalid int value"),
+    (["--no-such-flag"], "unrecognized arguments"),
+    (["--seeds", "1"], "did you mean --seed"),
+])
+def test_bad_input_is_one_line_and_exit_2(script, flags, needle, capsys, tmp_path):
+    p = run_main(f"{script.__name__}.py", *flags, "--run-dir", tmp_path, capsys=capsys)
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(lines) == 1 and needle in lines[0], p.stderr
+    assert "Traceback" not in p.stderr and not any(tmp_path.iterdir())  # no half-made folder
+
+
+@pytest.mark.quick
+def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
+    result = script.train(smoke(script, tmp_path))
+    run = result["run_dir"]
+    assert run.parent == tmp_path and run.name.startswith(f"{script.__name__}__")
+    names = {p.name for p in run.iterdir()}
+    assert "model.pt" in names and names & set(LOGS), names
+    assert not any(".tmp" in name for name in names), names
+    for picture in ("curve.png", "inside.png"):
+        assert picture in names and not_blank(run / picture), picture
+    capsys.readouterr()
+    p = run_main(f"{script.__name__}.py", "--eval", run, "--eval-episodes", "1", capsys=capsys)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip(), "--eval printed nothing"
+
+
+@pytest.mark.slow
+def test_same_seed_same_logs(script, tmp_path):
+    runs = [script.train(smoke(script, tmp_path / str(i), curves=False, gifs=False))["run_dir"]
+            for i in range(2)]
+    for name in LOGS:
+        if (runs[0] / name).exists():
+            assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
+
+
+def test_ctrl_c_is_one_line_exit_130_and_keeps_its_files(script, tmp_path):
+    flags = as_flags({**script.SMOKE, "print_every": 1})
+    code, out, err = interrupt(f"{script.__name__}.py", *flags, "--run-dir", tmp_path,
+                               after="step")
+    assert code == 130, (out, err)
+    assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
+    (run,) = tmp_path.iterdir()
+    names = {p.name for p in run.iterdir()}
+    assert "model.pt" in names and not any(".tmp" in n for n in names), names
