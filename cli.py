@@ -20,6 +20,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 
+import help_zh
 import plots
 from common import UserError, from_ctrl_c, headless
 
@@ -116,9 +117,13 @@ class CheckpointFlags(OutputFlags):
 
 def parse_config(cls, argv=None, description=None):
     """The @dataclass `cls` from flags. The script's own fields come first in --help, the
-    shared ones after. Bad input: one line, exit 2 (abbreviations are refused)."""
-    parser = argparse.ArgumentParser(description=description, allow_abbrev=False,
-                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    shared ones after. Bad input: one line, exit 2 (abbreviations are refused). --help-zh (or
+    --help in a Chinese locale) adds a Chinese line under each flag, from locale/flags.zh-CN.md."""
+    argv, zh = help_zh.wanted(sys.argv[1:] if argv is None else argv)
+    zh_docs = help_zh.flags(Path(inspect.getfile(cls)).stem) if zh else {}
+    parser = argparse.ArgumentParser(description=help_zh.overview(cls, description) if zh else
+                                     description, allow_abbrev=False, epilog=help_zh.HINT,
+                                     formatter_class=help_zh.HelpFormatter)
     parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage
     docs = {}
     for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
@@ -134,8 +139,11 @@ def parse_config(cls, argv=None, description=None):
         flag = "--" + f.name.replace("_", "-")
         text = docs.get(f.name, "") + (f"; none on the command line: {flag} none"
                                        if "None" in name else "")
+        chinese = zh_docs.get(f.name, "（还没有中文说明）") + (f"；命令行上写作 {flag} none"
+                                                            if "None" in name else "")
+        text = (text + (f"\n{chinese}" if zh else "")).replace("%", "%%")
         parser.add_argument(flag, default=f.default, **how, help=argparse.SUPPRESS if f.name in
-                            unused else text.replace("%", "%%"))  # unused: out of --help
+                            unused else text)  # unused: out of --help
     args = parser.parse_args(argv)
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):

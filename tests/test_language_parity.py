@@ -4,10 +4,14 @@ their `def train(`, so a new script needs its Chinese lines too) and the same co
 Chinese page links the Chinese page where there is one; and one glossary (README.zh-CN.md's
 术语对照) is used by every Chinese page and by the Chinese text in the code."""
 
+import dataclasses
+import importlib
 import re
 
 import pytest
 from pathlib import Path
+
+import help_zh
 
 pytestmark = pytest.mark.quick
 
@@ -113,6 +117,7 @@ def chinese_texts():
     readme = read(ZH_README)  # less its glossary, which names the words it replaces
     texts = {ZH_README.name: readme.replace(glossary(), "")}
     texts.update({f"docs/{p.name}": read(p) for p in DOCS.glob("*.zh-CN.md")})
+    texts[str(help_zh.HELP_ZH.relative_to(ROOT))] = read(help_zh.HELP_ZH)
     for path in [*ROOT.glob("*.py"), *ROOT.glob("exercises/*.py"), *ROOT.glob("experiments/*.py")]:
         lines = [l for l in read(path).splitlines() if re.search(r"[\u4e00-\u9fff]", l)]
         if lines:
@@ -257,3 +262,72 @@ def test_one_glossary_for_every_chinese_text():
         assert "提示" not in re.sub(r"<summary>提示", "", text), f"{name}: a prompt is 题目"
         assert "题目" in text, name
     assert "验证器" in chinese_texts()[GRPO_TEXTS[0]]
+
+
+# --help-zh: a Chinese line under each flag (locale/flags.zh-CN.md), for every script.
+
+def shown_flags(script):
+    """{field: English help} of the flags `python script --help` shows."""
+    module = importlib.import_module(script[:-3])
+    docs = {}
+    for klass in reversed(module.Config.__mro__[:-1]):
+        docs.update(cli_docs(klass))
+    unused = getattr(module.Config, "UNUSED_FLAGS", ())
+    return {f.name: f"{docs.get(f.name, '')} {f.default}" for f in dataclasses.fields(module.Config)
+            if f.name not in unused}
+
+
+def cli_docs(klass):
+    import cli
+    return cli._field_docs(klass)
+
+
+@pytest.mark.parametrize("script", training_scripts())
+def test_every_flag_has_a_chinese_line_with_the_english_lines_numbers(script):
+    chinese = help_zh.flags(script[:-3])
+    for name, english in shown_flags(script).items():
+        flag = "--" + name.replace("_", "-")
+        if name not in chinese:
+            pytest.fail(f"{script} {flag} has no Chinese line in {help_zh.HELP_ZH.relative_to(ROOT)}")
+        stray = {v for v in numbers(chinese[name]) - numbers(english) if not v == int(v) <= 10}
+        assert not stray, (f"{script} {flag}: the Chinese line quotes {sorted(stray)}, which its "
+                           f"English help and default do not: «{chinese[name]}»")
+
+
+def help_text(capsys, argv, module="ppo_cartpole"):
+    import cli
+    with pytest.raises(SystemExit) as stop:
+        cli.parse_config(importlib.import_module(module).Config, argv, description="English.")
+    assert stop.value.code == 0
+    return capsys.readouterr().out
+
+
+def columns(line):
+    return len(line) + len(help_zh.WIDE.findall(line))
+
+
+def test_help_zh_puts_each_chinese_line_under_its_english_one_within_the_width(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "80")
+    monkeypatch.setenv("LANG", "C.UTF-8")
+    for key in ("LC_ALL", "LC_MESSAGES"):
+        monkeypatch.delenv(key, raising=False)
+    out = help_text(capsys, ["--help-zh"])
+    lines = out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.lstrip().startswith("--gamma"))
+    assert lines[at + 1].strip().endswith("(default: 0.99)"), lines[at:at + 3]  # English first
+    assert lines[at + 2].strip() == "折扣因子（0.98 到 0.999）；0.99 大约往前看 100 步", lines[at:at + 3]
+    assert "中文导读：PPO-clip" in out and out.rstrip().endswith(help_zh.HINT)
+    too_wide = [line for line in lines if columns(line) > 80]
+    assert not too_wide, too_wide
+    monkeypatch.setenv("LANG", "zh_CN.UTF-8")  # a Chinese locale: plain --help has them too
+    assert help_text(capsys, ["--help"]) == out
+    monkeypatch.setenv("LANG", "en_US.UTF-8")
+    plain = help_text(capsys, ["--help"])
+    assert not help_zh.WIDE.search(plain.replace(help_zh.HINT, "")), "Chinese in English --help"
+
+
+def test_chinese_lines_wrap_by_columns_and_keep_punctuation_with_its_word():
+    """A Chinese character takes two columns; no line starts with ，or ends with （."""
+    assert help_zh._wrap_wide("一二三四五，六七", 10) == ["一二三四", "五，六七"]
+    assert help_zh._wrap_wide("一二三四（五六", 10) == ["一二三四", "（五六"]
+    assert help_zh._wrap_wide("用 Adam\n学习率，和\n中文", 12) == ["用 Adam 学习", "率，和中文"]
