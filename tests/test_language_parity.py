@@ -234,6 +234,9 @@ def test_chinese_pages_link_the_chinese_page_where_there_is_one():
                     f"{where} links {name}: link its Chinese page {chinese_of(target).name}"
             if anchor:
                 assert anchor in anchors(read(target)), f"{where} links {name}#{anchor}"
+        for shown, name in re.findall(r"\[([^\]\s]+\.md)\]\(([^)#\s:]+\.md)", read(zh)):
+            assert Path(shown).name == Path(name).name, \
+                f"{zh.relative_to(ROOT)}: the link [{shown}] goes to {name}: name what it links"
 
 
 def glossary():
