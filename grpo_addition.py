@@ -18,7 +18,7 @@ PPO line. The run, top to bottom:
     python grpo_addition.py                 # supervise, then GRPO (a few minutes on a CPU)
     python grpo_addition.py --eval runs/latest    # completions of the saved model
 
-中文导读：GRPO（组相对策略优化，DeepSeekMath 2024），把 PPO 用在语言模型上。状态是提示加上已经写出的
+中文导读：GRPO（组相对策略优化，DeepSeekMath 2024），把 PPO 用在语言模型上。状态是题目（prompt）加上已经写出的
 字符，动作是下一个字符，一个回合是一次完整的回答，奖励由程序检查答案对不对（对为 1，错为 0）。
 先用有错误标签（有时漏掉进位）的数据做监督训练，模型只是有时答对；然后每个题目采样 G 个回答，
 每个回答的优势是它的奖励减去本组的平均，再除以本组的标准差；没有评论员（critic）。

@@ -154,7 +154,7 @@ def summary(finals, what="at 1M"):
         return f"{len(finals)} of {len(SEEDS)} runs have reached 1M steps: no mean yet"
     mean = sum(finals) / len(finals)
     sd = (sum((x - mean) ** 2 for x in finals) / (len(finals) - 1)) ** 0.5  # between seeds
-    done = "" if len(finals) == len(SEEDS) else f" (of {len(SEEDS)}; the others still run)"
+    done = "" if len(finals) == len(SEEDS) else f" (of {len(SEEDS)}; the others have not reached 1M)"
     return (f"Over the {len(finals)} seeds {what}{done}: mean {mean:.0f}, "
             f"standard error {sd / len(finals) ** 0.5:.0f}")
 

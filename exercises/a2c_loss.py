@@ -7,7 +7,7 @@ only weighs the step), the critic fits its targets R, and an entropy bonus keeps
 The reference answer: actor_critic_cartpole.a2c_loss (actor_critic_cartpole.py).
 
 中文：练习：A2C 的损失（Mnih 等 2016，算法 S3 和第 4 节，对照教程 004）。演员提高
-log pi(a|s) * A（A 是常数），评论员拟合目标 R，熵奖励鼓励探索。参考答案：
+log pi(a|s) * A（A 是常数），评论员拟合目标 R，熵正则项鼓励探索。参考答案：
 actor_critic_cartpole.a2c_loss。
 """
 

@@ -6,7 +6,7 @@ barely moved, penalize less; if it moved too far, penalize more.
     python exercises/check.py adapt_beta
 The reference answer: ppo_kl_cartpole.adapt_beta (ppo_kl_cartpole.py).
 
-中文：练习：PPO 惩罚版的自适应 beta（论文第 4 节，教程 001 的 PPO1）。每次更新后，d 是平均 KL；
+中文：练习：PPO-penalty 的自适应 beta（论文第 4 节，教程 001 的 PPO1）。每次更新后，d 是平均 KL；
 策略几乎没动就减小惩罚，动得太多就加大惩罚。参考答案：ppo_kl_cartpole.adapt_beta。
 """
 

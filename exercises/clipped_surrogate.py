@@ -9,7 +9,7 @@ is minus its mean. The lines around the blank are the script's own.
 The reference answer: ppo_cartpole.compute_loss_pi (ppo_cartpole.py).
 
 中文：练习：PPO 的裁剪目标（Schulman 等 2017，式 7）。对照教程 001 的 PPO2 和教程 002 的
-compute_loss_pi。比率 r_t = pi(a|s) / pi_old(a|s)；min(r A, clip(r, 1 - eps, 1 + eps) A)，
+compute_loss_pi。比值 r_t = pi(a|s) / pi_old(a|s)；min(r A, clip(r, 1 - eps, 1 + eps) A)，
 损失是它的均值取负。空白前后的代码和脚本里的一样。参考答案：ppo_cartpole.compute_loss_pi。
 """
 

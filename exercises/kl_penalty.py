@@ -8,7 +8,7 @@ the script's own.
     python exercises/check.py kl_penalty
 The reference answer: ppo_kl_cartpole.compute_loss_pi (ppo_kl_cartpole.py).
 
-中文：练习：PPO 惩罚版的损失（Schulman 等 2017，式 8）。对照教程 001 的 PPO1：最大化
+中文：练习：PPO-penalty 的损失（Schulman 等 2017，式 8）。对照教程 001 的 PPO1：最大化
 mean(r A) - beta * KL(pi_old, pi)，损失取负。KL 的方向是 pi_old 在前。参考答案：
 ppo_kl_cartpole.compute_loss_pi。
 """

@@ -1,0 +1,104 @@
+"""--help in Chinese: `--help-zh` (or --help in a Chinese locale) puts a Chinese line under
+each flag's English help, read from locale/flags.zh-CN.md, and the script's 中文导读 under its
+English description. cli.parse_config asks it; nothing here knows a script."""
+
+import argparse
+import importlib
+import os
+import re
+import sys
+from pathlib import Path
+
+HELP_ZH = Path(__file__).resolve().parent / "locale" / "flags.zh-CN.md"
+HINT = "--help-zh: 每个参数下面加一行中文说明"  # the last line of every --help
+
+
+def wanted(argv):
+    """(argv with --help-zh read as --help, whether to add the Chinese lines)."""
+    argv = list(argv)
+    zh = "--help-zh" in argv or bool({"-h", "--help"} & set(argv) and chinese_locale())
+    return ["--help" if arg == "--help-zh" else arg for arg in argv], zh
+
+
+def chinese_locale():
+    """Whether the locale (LC_ALL, else LC_MESSAGES, else LANG) is Chinese."""
+    env = os.environ
+    return (env.get("LC_ALL") or env.get("LC_MESSAGES") or env.get("LANG", "")).startswith("zh")
+
+
+def flags(script, module=None):
+    """{field: its Chinese line} for `script` (its name), read from HELP_ZH's tables: a section
+    whose heading names fewer scripts, `script` among them, wins over one naming more, and
+    every section wins over 所有脚本 (all scripts); the script's own FLAGS_ZH ({field: line},
+    if it has one: a new script needs no other file) wins over them all."""
+    sections = []
+    for line in HELP_ZH.read_text(encoding="utf-8").splitlines():
+        if line.startswith("## "):
+            sections.append((re.findall(r"`(\w+)\.py`", line), {}))
+        elif sections and (row := re.match(r"\| `--([\w-]+)` \| (.+) \|$", line)):
+            sections[-1][1][row[1].replace("-", "_")] = row[2]
+    found = {}
+    for names, rows in sorted(sections, key=lambda s: (bool(s[0]), -len(s[0]))):
+        if not names or script in names:
+            found.update(rows)
+    module = module or importlib.import_module(script)  # a script run as __main__: given
+    return {**found, **getattr(module, "FLAGS_ZH", {})}
+
+
+def overview(cls, description):
+    """`description`, then the 中文导读 paragraph of the module that defines `cls`."""
+    doc = sys.modules[cls.__module__].__doc__ or ""
+    return "\n\n".join([description or "", *(p for p in doc.split("\n\n")
+                                             if p.startswith("中文导读"))])
+
+
+class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """--help with each flag's default; a Chinese line (--help-zh) stays on a line of its own,
+    after the English line and its default, wrapped by columns (a Chinese character takes two)."""
+
+    def _get_help_string(self, action):
+        english, _, chinese = super()._get_help_string(action).partition("\n")
+        default = " (default: %(default)s)"
+        if chinese.endswith(default):
+            english, chinese = english + default, chinese[:-len(default)]
+        return english + (f"\n{chinese}" if chinese else "")
+
+    def _split_lines(self, text, width):
+        split = super()._split_lines
+        return [piece for line in text.split("\n")
+                for piece in (_wrap_wide(line, width) if WIDE.search(line) else split(line, width))]
+
+    def _fill_text(self, text, width, indent):
+        fill = super()._fill_text
+        return "\n\n".join("\n".join(indent + line for line in _wrap_wide(part, width))
+                           if WIDE.search(part) else fill(part, width, indent)
+                           for part in text.split("\n\n"))
+
+
+WIDE = re.compile(r"[\u3000-\u303f\u4e00-\u9fff\uff00-\uffef]")  # two columns each
+TOKEN = re.compile(r"[\u3000-\u303f\u4e00-\u9fff\uff00-\uffef]|[^\s\u3000-\u303f\u4e00-\u9fff"
+                   r"\uff00-\uffef]+|\s+")  # a Chinese character, a word or a space
+OPEN, CLOSE = "（《“", "，。；：、）》”"  # no line ends with the first nor starts with the second
+
+
+def columns(text):
+    return len(text) + len(WIDE.findall(text))
+
+
+def _wrap_wide(text, width):
+    """`text` in lines of at most `width` columns, broken between words or Chinese characters;
+    lines in the source are joined without a space where a Chinese character ends one."""
+    text = re.sub(r"(?<=[\u3000-\u303f\u4e00-\u9fff\uff00-\uffef])\s*\n\s*", "", text)
+    lines, line = [], []
+    for token in TOKEN.findall(" ".join(text.split())):
+        if token.isspace():
+            line += [" "] if line else []
+        elif line and columns("".join(line) + token) > width:
+            rest, cut = line + [token], len(line)
+            while cut > 1 and (rest[cut] in CLOSE or rest[cut - 1] in OPEN):
+                cut -= 1
+            lines.append("".join(rest[:cut]).rstrip())
+            line = rest[cut:] if rest[cut] != " " else rest[cut + 1:]
+        else:
+            line.append(token)
+    return lines + ["".join(line).rstrip()] if line else lines
