@@ -244,3 +244,15 @@ def test_ctrl_c_during_watch(tmp_path):
     assert "Ctrl-C stops" in "".join(seen) and seen[-1].startswith("episode 2/100000: return")
     assert proc.returncode == 130, err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.quick
+def test_a_run_that_stops_short_of_its_budget_says_why(tmp_path, capsys):
+    """--total-timesteps 2000 trains 1792 steps (7 whole rollouts of 8 x 32): the line says so."""
+    import ppo_cartpole
+    result = ppo_cartpole.train(small(ppo_cartpole, tmp_path, total_timesteps=2000,
+                                      stop_when_solved=False, gifs=False, curves=False,
+                                      eval_episodes=1))
+    assert result["global_step"] == 1792
+    assert ("trained 1792 steps (whole rollouts only: the last 208 steps of --total-timesteps "
+            "2000 make no whole one)") in capsys.readouterr().out

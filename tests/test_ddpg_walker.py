@@ -554,3 +554,26 @@ def test_steps_per_second_leave_out_the_evaluations_and_resume_keeps_the_clock(
     last = [line for line in capsys.readouterr().out.splitlines() if line.startswith("step")][-1]
     *hours, minutes, _ = last.split()[-1].split(":")  # the run's clock: [h:]mm:ss
     assert int(hours[0] if hours else 0) * 60 + int(minutes) >= 33  # 2000 s on: not from 0
+
+
+def test_model_pt_is_the_actor_training_ended_with(tmp_path):
+    """400 steps, evaluations at 150 and 300: model.pt holds step 400's actor (not the last
+    evaluation's), and says so; --eval plays that actor."""
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=400,
+                              start_steps=150, eval_every=150, eval_episodes=1, gifs=False,
+                              curves=False))
+    ckpt = torch.load(result["run_dir"] / "model.pt", weights_only=True)
+    assert ckpt["global_step"] == result["global_step"] == 400
+    best = torch.load(result["run_dir"] / "best.pt", weights_only=True)
+    assert best["global_step"] in (150, 300)
+    assert any(not torch.equal(ckpt["actor"][k], best["actor"][k]) for k in ckpt["actor"])
+
+
+def test_resume_of_another_scripts_run_names_that_script(tmp_path, capsys):
+    import ppo_cartpole
+    run = ppo_cartpole.train(ppo_cartpole.Config(run_dir=str(tmp_path), total_timesteps=512,
+                                                 stop_when_solved=False, gifs=False,
+                                                 curves=False, eval_episodes=1))["run_dir"]
+    p = run_main("ddpg_walker.py", "--resume", run, capsys=capsys)
+    assert p.returncode == 2 and "is not a model of ddpg_walker.py: it is a model of " \
+        "ppo_cartpole.py" in p.stderr, p.stderr

@@ -56,9 +56,17 @@ def test_compare_overlays_three_runs_into_one_png(tmp_path):
     assert [f.name for f in tmp_path.iterdir() if f.suffix == ".png"] == ["compare.png"]
 
 
-def test_compare_rejects_a_folder_that_is_not_a_run(tmp_path):
+def test_compare_leaves_out_a_folder_that_is_not_a_run(tmp_path):
+    """`python plots.py runs/*` once an experiment has run: runs/experiments is left out with a
+    note, the runs are drawn; with no run at all, one line and exit 2."""
     p = run_script("plots.py", tmp_path)
     assert p.returncode == 2 and "is not a run folder" in p.stderr and "Traceback" not in p.stderr
+    assert "none of these folders is a run" in p.stderr
+    run = quick_run(tmp_path / "runs", seed=0)["run_dir"]
+    (tmp_path / "runs" / "experiments").mkdir()
+    p = run_script("plots.py", *sorted((tmp_path / "runs").iterdir()), "--out", tmp_path / "c.png")
+    assert p.returncode == 0 and "experiments is not a run folder" in p.stderr, p.stderr
+    assert_curve_drawn(tmp_path / "c.png") and run.exists()
 
 
 def test_curve_is_not_drawn_blank_for_a_ppo_kl_run(tmp_path):

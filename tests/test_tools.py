@@ -462,3 +462,40 @@ def test_eval_runs_latest_from_the_command_line(tmp_path):
     assert "ppo_cartpole__CartPole-v1__seed0__" in p.stdout
     p = run_script("ppo_cartpole.py", "--eval", "elsewhere/latest", cwd=tmp_path, timeout=120)
     assert p.returncode == 2 and "no run of ppo_cartpole.py in elsewhere" in p.stderr
+
+
+@pytest.mark.quick
+def test_the_time_left_does_not_flicker_at_a_minute():
+    """34 s left read "under a minute" at one line and "about 1 min" at the next (round())."""
+    assert [runlog.hours_minutes(s) for s in (20, 34, 59.9, 60, 89, 91, 5000)] == [
+        "under a minute", "under a minute", "under a minute", "about 1 min", "about 1 min",
+        "about 2 min", "about 1 h 23 min"]
+
+
+@pytest.mark.quick
+def test_a_csv_row_with_other_columns_than_its_header_is_refused(tmp_path):
+    """A column missing from some rows (an 8-field header over 9-field rows) cannot happen."""
+    runlog.append_csv(tmp_path / "log.csv", dict(global_step=1, a=1.0, b=None))
+    with pytest.raises(ValueError, match="under the header"):
+        runlog.append_csv(tmp_path / "log.csv", dict(global_step=2, a=1.0))
+    assert (tmp_path / "log.csv").read_text().splitlines() == ["global_step,a,b", "1,1,nan"]
+
+
+@pytest.mark.quick
+def test_an_update_logs_exactly_the_declared_columns(tmp_path):
+    """A column logged but not declared, or declared but not logged, fails at the first update;
+    None is "not measured": nan in the CSV, left out of the progress line."""
+    logged = dict(lr=(None, "lr"), loss=(".3f", "loss"), pass1=(".2f", "pass@1"))
+    run = a_run(tmp_path / "a", threshold=1.0, logged=logged)
+    with pytest.raises(ValueError, match="declares the columns"):
+        run.update(dict(loss=0.5, extra=1.0), lr=0.1, pass1=None)
+    run = a_run(tmp_path / "b", threshold=1.0, logged=logged)
+    with pytest.raises(ValueError, match="declares the columns"):
+        run.update(dict(loss=0.5), lr=0.1)
+
+
+@pytest.mark.quick
+def test_none_is_not_divergence_but_nan_is():
+    runlog.stop_if_diverged(1, dict(loss=0.5, pass1=None), ())
+    with pytest.raises(UserError, match="diverged at step 1: nan or inf in loss"):
+        runlog.stop_if_diverged(1, dict(loss=float("nan")), ())
