@@ -23,6 +23,7 @@ import lab  # noqa: F401  (first: it puts the scripts on the path)
 
 import csv
 
+import common
 import td3_walker
 
 
@@ -48,7 +49,7 @@ SETTINGS = dict(env_id="Walker2d-v5", start_steps=10_000, eval_every=5000, eval_
 def save_every_evaluation(curves, path):
     """Every evaluation of every run (variant, seed, step, return, Q, discounted return, their
     gap) in one CSV: the record behind the docs' figures of this experiment."""
-    with open(path, "w", newline="") as f:
+    with common.written_whole(path) as tmp, open(tmp, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["variant", "seed_index", "global_step", "eval_mean", "q_estimate",
                          "discounted_return", "gap"])
@@ -81,9 +82,13 @@ def draw_gap(curves, path):
     return lab.plots.save_whole(plt, fig, path, dpi=80)
 
 
+def more(curves, folder):
+    """Beside the table and the figure: every evaluation, and the gap drawn."""
+    save_every_evaluation(curves, folder / "td3_fixes_evaluations.csv")
+    print(f"the gap: {draw_gap(curves, folder / 'td3_fixes_gap.png')}")
+
+
 if __name__ == "__main__":
-    curves = lab.main("td3_fixes", td3_walker, VARIANTS, budget=50_000, solved=1000.0,
-                      what="evaluation return (no noise)", quick_budget=2500, panels=PANELS,
-                      quick_settings=dict(start_steps=1000, eval_every=2500), **SETTINGS)
-    save_every_evaluation(curves, lab.OUT / "td3_fixes_evaluations.csv")
-    print(f"the gap: {draw_gap(curves, lab.OUT / 'td3_fixes_gap.png')}")
+    lab.main("td3_fixes", td3_walker, VARIANTS, budget=50_000, solved=1000.0,
+             what="evaluation return (no noise)", quick_budget=2500, panels=PANELS,
+             quick_settings=dict(start_steps=1000, eval_every=2500), more=more, **SETTINGS)
