@@ -65,9 +65,9 @@ def interrupt(script, *args, after, cwd=None, env=None):
 
 def interrupt_in_a_terminal(script, *args, after, cwd=None, env=None):
     """interrupt(), with Ctrl-C sent as a terminal sends it: to the whole foreground process
-    group, the script and every process it started. Returns (returncode, stdout, stderr,
-    left): left, whether any process of the group was still there once the script had exited
-    (they are then killed)."""
+    group, the script and every process it started. `after`: the start of a line, or a tuple
+    of them, seen in that order. Returns (returncode, stdout, stderr, left): left, whether any
+    process of the group was still there once the script had exited (they are then killed)."""
     return ctrl_c(script, *args, after=after, cwd=cwd, env=env, group=True)
 
 
@@ -79,16 +79,23 @@ def ctrl_c(script, *args, after, cwd, env, group):
     proc = subprocess.Popen([sys.executable, str(ROOT / script), *map(str, args)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env, cwd=cwd or ROOT,
                             preexec_fn=ctrl_c_default, start_new_session=group)
-    seen = []
+    seen, waiting = [], [after] if isinstance(after, str) else list(after)
     for line in proc.stdout:  # wait until training is under way
         seen.append(line)
-        if line.startswith(after):
-            break
+        if line.startswith(waiting[0]):
+            waiting.pop(0)
+            if not waiting:
+                break
     if group:  # its own session, so its group's id is its pid
         os.killpg(proc.pid, signal.SIGINT)
     else:
         proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
+    try:
+        out, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:  # it went on: end it (and its group), then fail
+        os.killpg(proc.pid, signal.SIGKILL) if group else proc.kill()
+        proc.communicate()
+        raise
     left = False
     if group:
         try:

@@ -1,6 +1,7 @@
 """The experiments: each variant differs from the original only as its docstring says, the
 code it replaces is put back after its runs, and each file runs in its quick mode."""
 
+import subprocess
 import sys
 from pathlib import Path
 
@@ -217,7 +218,8 @@ def test_swapped_puts_the_original_back_even_after_an_error():
 @pytest.mark.parametrize("name", [e for e in EXPERIMENTS if e != "advantage_normalization"])
 def test_each_experiment_runs_in_quick_mode_and_leaves_nothing(name, tmp_path):
     """--quick, a smoke test, draws its figure aside and removes it: no runs/ where it ran,
-    nothing left in the temporary folder. (advantage_normalization: see tiny() below.)"""
+    no folder of ours left in the temporary folder (torch keeps its own cache there,
+    torchinductor_<user>). (advantage_normalization: see tiny() below.)"""
     temp = tmp_path / "temp"
     temp.mkdir()
     p = run_script(f"experiments/{name}.py", "--quick", timeout=300, cwd=tmp_path,
@@ -226,7 +228,7 @@ def test_each_experiment_runs_in_quick_mode_and_leaves_nothing(name, tmp_path):
     lines = p.stdout.splitlines()
     assert any(line.startswith("original") for line in lines)
     assert any(line.startswith("variant") for line in lines)
-    assert not (tmp_path / "runs").exists() and not list(temp.iterdir())
+    assert not (tmp_path / "runs").exists() and not list(temp.glob("experiment_*"))
 
 
 def test_median_steps_count_the_seeds_that_never_got_there():
@@ -289,9 +291,11 @@ def test_the_options_that_are_right():
         quick=False, docs=True, workers=None, cluster={"folder": "jobs", "partition": "cpu"})
 
 
-def tiny(folder, seeds, budget, name="tiny"):
+def tiny(folder, seeds, budget, name="tiny", saying=False):
     """An experiment file of our own in `folder`: advantage_normalization's two variants,
-    `seeds` and `budget` of our choice (a real one's full run takes minutes)."""
+    `seeds` and `budget` of our choice (a real one's full run takes minutes). saying: each
+    update of a run prints "update done" (to the real stdout: the runs' own is silenced), so
+    that a test can tell when a run is inside its training loop."""
     script = folder / f"{name}.py"
     script.write_text(
         f'''"""Question: a tiny experiment, for the tests."""
@@ -301,8 +305,20 @@ import lab
 import advantage_normalization
 import ppo_cartpole
 
-lab.main({name!r}, ppo_cartpole, advantage_normalization.VARIANTS, seeds={tuple(seeds)!r},
-         budget={budget})
+UPDATE = ppo_cartpole.ppo_update
+
+
+def ppo_update_saying_so(*args):
+    stats = UPDATE(*args)
+    print("update done", file=sys.__stdout__, flush=True)
+    return stats
+
+
+VARIANTS = advantage_normalization.VARIANTS
+if {saying!r}:
+    VARIANTS = {{name: {{**variant, "swap": [(ppo_cartpole, "ppo_update", ppo_update_saying_so)]}}
+                for name, variant in VARIANTS.items()}}
+lab.main({name!r}, ppo_cartpole, VARIANTS, seeds={tuple(seeds)!r}, budget={budget})
 ''')
     return script
 
@@ -318,8 +334,8 @@ def test_two_workers_give_the_same_csvs_byte_for_byte_as_one(tmp_path):
         assert p.returncode == 0, p.stderr
         assert f"with {workers} worker(s)" in p.stdout
         lines = p.stdout.splitlines()
-        assert sum(line.startswith("original") for line in lines) == 2 + 1  # runs, table
-        assert sum(line.startswith("variant") for line in lines) == 2 + 1
+        assert sum(line.startswith("original:") for line in lines) == 2 + 1  # runs, table
+        assert sum(line.startswith("variant:") for line in lines) == 2 + 1
         written[workers] = (where / "runs" / "experiments" / "tiny.csv").read_bytes()
     assert written[1] == written[2]
 
@@ -351,17 +367,41 @@ def test_an_experiment_writes_to_runs_experiments_where_it_is_run(tmp_path, monk
     assert not (ROOT / "runs" / "experiments" / f"{name}.csv").exists()
 
 
+def test_the_workers_are_deaf_to_ctrl_c_from_the_first_to_the_last():
+    """A terminal's Ctrl-C reaches the workers too: each, the first ones and those the pool
+    forks later (from its own thread, one per run), has SIGINT blocked, so that the experiment
+    alone answers it; the experiment's own thread has it back."""
+    code = f"""
+import signal, sys
+sys.path.insert(0, {str(ROOT / "experiments")!r})
+import lab
+
+
+def blocked(_):
+    return signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+
+with lab.pool_deaf_to_ctrl_c(1) as pool:
+    print(pool.map(blocked, range(3), chunksize=1))  # three workers: one run each
+print(blocked(None))
+"""
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.splitlines() == ["[True, True, True]", "False"]
+
+
 @pytest.mark.parametrize("workers", [1, 2])
 def test_ctrl_c_keeps_the_finished_runs_says_so_in_one_line_and_leaves_nothing_else(
         workers, tmp_path):
-    """Ctrl-C, as a terminal sends it (to the workers too): exit 130, one line that says how
-    many runs are kept and how to go on; each kept run whole, the run cut short not kept, no
-    *.tmp, no temporary folder, no worker process left."""
-    script, temp = tiny(tmp_path, range(50), 512), tmp_path / "temp"
+    """Ctrl-C, as a terminal sends it (to the workers too), once a run has been kept and
+    another is inside its training loop: exit 130, one line that says how many runs are kept
+    and how to go on; each kept run whole, the runs cut short not kept, no *.tmp, no
+    temporary folder of ours, no worker process left."""
+    script, temp = tiny(tmp_path, range(50), 512, saying=True), tmp_path / "temp"
     temp.mkdir()
     code, out, err, left = interrupt_in_a_terminal(script, "--workers", workers,
-                                                   after="original", cwd=tmp_path,
-                                                   env={"TMPDIR": str(temp)})
+                                                   after=("original", "update done"),
+                                                   cwd=tmp_path, env={"TMPDIR": str(temp)})
     assert code == 130, (out, err)
     assert not left  # no worker process outlives the experiment
     record = tmp_path / "runs" / "experiments" / "tiny_runs"
@@ -373,7 +413,7 @@ def test_ctrl_c_keeps_the_finished_runs_says_so_in_one_line_and_leaves_nothing_e
     for run in kept:  # each whole: 512 steps are two updates of 256, two rows
         assert [p.name for p in run.iterdir()] == ["progress.csv"]
         assert len((run / "progress.csv").read_text().splitlines()) == 1 + 2, run
-    assert not list(tmp_path.rglob("*.tmp*")) and not list(temp.iterdir())
+    assert not list(tmp_path.rglob("*.tmp*")) and not list(temp.glob("experiment_*"))
     assert not (tmp_path / "runs" / "experiments" / "tiny.csv").exists()
 
 
