@@ -345,7 +345,8 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     figure in runs/experiments/ of the folder it runs in (--docs: the repository's
     docs/experiments/, the committed ones). --quick: one seed, `quick_budget` steps (2048 for
     CartPole, 2500 for DDPG), the figure drawn in a temporary folder and removed (a smoke
-    test; the tests run it). more(curves, folder): what else the experiment writes there.
+    test; the tests run it). more(curves, folder, settings): what else the experiment writes
+    there (returns their paths); settings: those of its runs, --quick's included.
     Ctrl-C: exit 130 and one line, the runs that ended kept (a rerun goes on from them)."""
     cores = os.cpu_count() or 1
     if {"-h", "--help"} & set(sys.argv[1:]):
@@ -372,13 +373,13 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
         try:
             curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers,
                          given["cluster"], record, **settings)
-            path = report(name, curves, folder, solved, what, panels)
-            if more is not None:
-                more(curves, folder)
+            paths = [report(name, curves, folder, solved, what, panels),
+                     *(more(curves, folder, settings) if more is not None else [])]
         except KeyboardInterrupt:
             print(f"\ninterrupted (Ctrl-C): {stopped(record, variants, seeds)}", file=sys.stderr)
             raise SystemExit(130) from None
-        shown = "not kept (--quick)" if given["quick"] else path
+        shown = ("not kept (--quick)" if given["quick"] else str(paths[0]) if len(paths) == 1
+                 else f"{paths[0]} (and {', '.join(map(str, paths[1:]))})")
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
           f"{time.time() - started:.0f} s with {workers} worker(s); figure: {shown}")
     return curves

@@ -59,18 +59,20 @@ def save_every_evaluation(curves, path):
                 for step, value, qi, gi in zip(steps, values, q, g):
                     writer.writerow([variant, seed_index, int(step), f"{value:.6g}",
                                      f"{qi:.6g}", f"{gi:.6g}", f"{qi - gi:.6g}"])
+    return path
 
 
-def draw_gap(curves, path):
+def draw_gap(curves, path, start_steps):
     """The gap itself, Q(s, mu(s)) minus the discounted return obtained, per variant: the median
-    over the seeds and their band (min to max), from the first learned evaluation on."""
+    over the seeds and their band (min to max), from the first evaluation after the
+    `start_steps` of warm-up on."""
     plt = lab.plots.pyplot()
     fig, ax = plt.subplots(figsize=(10, 3.4))
     for color, (variant, runs) in enumerate(curves.items()):
         gaps = []
         for _, _, kept in runs:
             (steps, q), (_, g) = kept["q_estimate"], kept["discounted_return"]
-            after = steps > SETTINGS["start_steps"]  # the warm-up's untrained critic: left out
+            after = steps > start_steps  # the warm-up's untrained critic: left out
             gaps.append((steps[after], (q - g)[after]))
         lab.band(ax, gaps, color, f"{variant} (median of {len(runs)} seeds; band: min to max)")
     ax.axhline(0, color="k", lw=0.8)
@@ -82,10 +84,10 @@ def draw_gap(curves, path):
     return lab.plots.save_whole(plt, fig, path, dpi=80)
 
 
-def more(curves, folder):
-    """Beside the table and the figure: every evaluation, and the gap drawn."""
-    save_every_evaluation(curves, folder / "td3_fixes_evaluations.csv")
-    print(f"the gap: {draw_gap(curves, folder / 'td3_fixes_gap.png')}")
+def more(curves, folder, settings):
+    """Beside the table and the figure: every evaluation, and the gap drawn (their paths)."""
+    return [save_every_evaluation(curves, folder / "td3_fixes_evaluations.csv"),
+            draw_gap(curves, folder / "td3_fixes_gap.png", settings["start_steps"])]
 
 
 if __name__ == "__main__":

@@ -453,3 +453,15 @@ def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
     q1, q2 = torch.tensor([5.0, 5.0]), torch.tensor([3.0, 9.0])
     assert td3_fixes.td_target_of_q1_alone(r, nd, q1, q2, 0.5).tolist() == [3.5, 2.0]
     assert td3_walker.td_target(r, nd, q1, q2, 0.5).tolist() == [2.5, 2.0]
+
+
+def test_td3_fixes_writes_every_evaluation_and_the_gap_after_its_runs_warm_up(tmp_path):
+    """The gap is drawn from the evaluations after the warm-up of the runs as they were run
+    (--quick's is 1000 steps, not 10,000: its one evaluation, at 2500, is after it)."""
+    steps = np.array([2500.0])
+    one = (steps, np.array([100.0]), {"q_estimate": (steps, np.array([5.0])),
+                                      "discounted_return": (steps, np.array([3.0]))})
+    curves = {name: [one] for name in td3_fixes.VARIANTS}
+    table, gap = td3_fixes.more(curves, tmp_path, {"start_steps": 1000})
+    assert table.read_text().splitlines()[1] == "DDPG: no fix,0,2500,100,5,3,2"  # gap: 5 - 3
+    assert gap.stat().st_size > 0 and not list(tmp_path.glob("*.tmp*"))
