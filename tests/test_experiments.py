@@ -295,11 +295,13 @@ def tiny(folder, seeds, budget, name="tiny", saying=False):
     """An experiment file of our own in `folder`: advantage_normalization's two variants,
     `seeds` and `budget` of our choice (a real one's full run takes minutes). saying: each
     update of a run prints "update done" (to the real stdout: the runs' own is silenced), so
-    that a test can tell when a run is inside its training loop."""
+    that a test can tell when a run is inside its training loop; and after the table and the
+    figure, the experiment prints "writing more" and waits there for a Ctrl-C."""
     script = folder / f"{name}.py"
     script.write_text(
         f'''"""Question: a tiny experiment, for the tests."""
 import sys
+import time
 sys.path.insert(0, {str(ROOT / "experiments")!r})
 import lab
 import advantage_normalization
@@ -314,11 +316,18 @@ def ppo_update_saying_so(*args):
     return stats
 
 
-VARIANTS = advantage_normalization.VARIANTS
+def more_until_ctrl_c(curves, folder, settings):
+    print("writing more", flush=True)
+    while True:
+        time.sleep(0.01)
+
+
+VARIANTS, MORE = advantage_normalization.VARIANTS, None
 if {saying!r}:
     VARIANTS = {{name: {{**variant, "swap": [(ppo_cartpole, "ppo_update", ppo_update_saying_so)]}}
                 for name, variant in VARIANTS.items()}}
-lab.main({name!r}, ppo_cartpole, VARIANTS, seeds={tuple(seeds)!r}, budget={budget})
+    MORE = more_until_ctrl_c
+lab.main({name!r}, ppo_cartpole, VARIANTS, seeds={tuple(seeds)!r}, budget={budget}, more=MORE)
 ''')
     return script
 
@@ -453,6 +462,19 @@ def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
     q1, q2 = torch.tensor([5.0, 5.0]), torch.tensor([3.0, 9.0])
     assert td3_fixes.td_target_of_q1_alone(r, nd, q1, q2, 0.5).tolist() == [3.5, 2.0]
     assert td3_walker.td_target(r, nd, q1, q2, 0.5).tolist() == [2.5, 2.0]
+
+
+def test_ctrl_c_after_the_last_run_says_all_are_kept(tmp_path):
+    """Ctrl-C once every run is kept (here: while the experiment writes what it adds to its
+    table and figure): one line that says so and how to get the rest, exit 130."""
+    script = tiny(tmp_path, (0,), 256, saying=True)
+    code, out, err, left = interrupt_in_a_terminal(script, "--workers", 1, after="writing more",
+                                                   cwd=tmp_path)
+    assert code == 130 and not left, (out, err)
+    assert err.strip().splitlines() == [
+        f"interrupted (Ctrl-C): all 2 runs kept in {Path('runs', 'experiments', 'tiny_runs')}; "
+        "the same command again draws the table and the figure from them"]
+    assert not list(tmp_path.rglob("*.tmp*"))
 
 
 def test_td3_fixes_writes_every_evaluation_and_the_gap_after_its_runs_warm_up(tmp_path):
