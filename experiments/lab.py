@@ -9,13 +9,16 @@ run at once, each in its own process with one torch thread, and give the very nu
 one after another in this process gives (every run seeds all it draws from). Past one
 machine, --cluster FOLDER hands each run to submitit (pip install submitit): a Slurm job
 where Slurm is (--partition NAME), a local process otherwise; the same numbers again.
+Ctrl-C stops it in one line: the runs that ended are kept, the same command goes on.
 """
 
 import contextlib
 import csv
+import difflib
 import multiprocessing
 import os
 import re
+import signal
 import statistics
 import sys
 import tempfile
@@ -27,10 +30,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the scripts, when run as `python experiments/<name>.py`
 
+import common  # noqa: E402
 import plots  # noqa: E402
 
 DOCS = ROOT / "docs" / "experiments"  # the committed figures and CSVs (--docs refreshes them)
-OUT = ROOT / "runs" / "experiments"  # where a learner's own run writes them
+# Where a learner's own run writes them: in the folder the command runs in, as the scripts'
+# runs/ is.
+OUT = Path("runs") / "experiments"
 # The README's DDPG-in-minutes settings (InvertedPendulum-v5, 20,000 steps), evaluated every
 # 2500 steps over 5 episodes: the DDPG experiments' task.
 DDPG_IN_MINUTES = dict(env_id="InvertedPendulum-v5", start_steps=1000, eval_every=2500,
@@ -68,32 +74,46 @@ def run(script, variants, seeds, budget, columns=(), workers=1, cluster=None, re
     for (name, seed), curve in results.items():
         print(f"{name:40} seed {seed}: final {curve[1][-1]:6.1f}  (recorded)", flush=True)
     jobs = [(name, seed) for name in variants for seed in seeds if (name, seed) not in results]
-    with tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
-        task = (script, variants, budget, columns, settings, tmp, record)
+    if jobs and cluster is None:
+        print(f"{len(jobs)} runs to go, {min(workers, len(jobs))} at a time"
+              + (f"; each run's log is kept in {record} as it ends" if record else ""), flush=True)
+    # Ctrl-C: the runs under way are dropped (their temporary folder goes); those kept stay.
+    with tempfile.TemporaryDirectory(prefix="experiment_") as tmp, contextlib.ExitStack() as stack:
+        task = (script, variants, budget, columns, settings, tmp)
         if cluster is not None:
             done = on_cluster(task, jobs, **cluster)
-            workers = 1  # no pool to close
         elif workers == 1 or len(jobs) <= 1:
             done = (one_run(task, job) for job in jobs)
         else:  # a fresh process per run (maxtasksperchild=1): nothing carries from one to the next
             global _TASK
             _TASK = task
-            pool = multiprocessing.get_context("fork").Pool(min(workers, len(jobs)),
-                                                           maxtasksperchild=1)
+            pool = stack.enter_context(pool_deaf_to_ctrl_c(min(workers, len(jobs))))
             done = pool.imap_unordered(_one_run_of_task, jobs)
-        for job, curve, seconds in done:
+        for job, curve, seconds, log in done:
+            if record is not None:  # kept at once: a later call reads it instead of running again
+                keep(record, job, log)
             results[job] = curve
             print(f"{job[0]:40} seed {job[1]}: final {curve[1][-1]:6.1f}  ({seconds:.0f} s)",
                   flush=True)
-        if workers > 1 and len(jobs) > 1 and cluster is None:
-            pool.close()
-            pool.join()
     return {name: [results[(name, seed)] for seed in seeds] for name in variants}
 
 
+def pool_deaf_to_ctrl_c(processes):
+    """A pool of `processes` worker processes, one fresh process per run, on which Ctrl-C has
+    no hold: a terminal sends it to them too, and this process alone answers it (leaving the
+    pool's `with` block ends them). They are forked with SIGINT blocked, by this thread and
+    by the pool's own threads, which are started while it is: each inherits the block."""
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        return multiprocessing.get_context("fork").Pool(processes, maxtasksperchild=1)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)  # a Ctrl-C held meanwhile: now
+
+
 def one_run(task, job):
-    """One (variant, seed) run of `task`: (job, (steps, values, kept), seconds)."""
-    script, variants, budget, columns, settings, tmp, record = task
+    """One (variant, seed) run of `task`: (job, (steps, values, kept), seconds, its log). A run
+    that Ctrl-C cut short is no result: KeyboardInterrupt, as the scripts' train() ends it."""
+    script, variants, budget, columns, settings, tmp = task
     name, seed = job
     variant = variants[name]
     module = variant.get("script", script)
@@ -105,14 +125,12 @@ def one_run(task, job):
     started = time.time()
     with swapped(variant.get("swap", [])), contextlib.redirect_stdout(None):
         result = module.train(cfg)
+    if result.get("interrupted"):
+        raise KeyboardInterrupt
     steps, values, _ = plots.curve_of(result["run_dir"])
-    if record is not None:  # kept at once: a later call reads it instead of running again
-        log = next(p for p in (Path(result["run_dir"]) / n for n in LOGS) if p.exists())
-        kept = record_dir(record, job)
-        kept.mkdir(parents=True, exist_ok=True)
-        (kept / f"{log.name}.tmp").write_bytes(log.read_bytes())
-        (kept / f"{log.name}.tmp").replace(kept / log.name)
-    return job, (steps, values, kept_columns(result["run_dir"], columns)), time.time() - started
+    log = next(p for p in (Path(result["run_dir"]) / n for n in LOGS) if p.exists())
+    return (job, (steps, values, kept_columns(result["run_dir"], columns)),
+            time.time() - started, str(log))
 
 
 LOGS = ("evaluations.csv", "progress.csv")  # DDPG's and TD3's log; the CartPole scripts'
@@ -122,6 +140,20 @@ def record_dir(record, job):
     """Where run `job` = (variant, seed) keeps its log in `record`."""
     name, seed = job
     return Path(record) / f"{re.sub(r'[^A-Za-z0-9]+', '_', name).strip('_')}__seed{seed}"
+
+
+def keep(record, job, log):
+    """A copy of run `job`'s `log` in `record`, written whole (Ctrl-C waits for it)."""
+    folder = record_dir(record, job)
+    folder.mkdir(parents=True, exist_ok=True)
+    with common.written_whole(folder / Path(log).name) as tmp:
+        tmp.write_bytes(Path(log).read_bytes())
+
+
+def kept_runs(record, variants, seeds):
+    """How many of the (variant, seed) runs have their log in `record`."""
+    return sum(any((record_dir(record, (name, seed)) / n).exists() for n in LOGS)
+               for name in variants for seed in seeds)
 
 
 def recorded(record, job, columns):
@@ -148,8 +180,8 @@ def on_cluster(task, jobs, folder, partition=None):
         sys.exit("error: --cluster needs submitit: pip install submitit")
     paths = [str(ROOT), str(ROOT / "experiments"), os.environ.get("PYTHONPATH", "")]
     os.environ["PYTHONPATH"] = os.pathsep.join(p for p in paths if p)
-    run_dir = Path(folder) / "runs"  # the runs' own folders: where the jobs can write
-    task = (*task[:5], str(run_dir), task[6])
+    run_dir = Path(folder).resolve() / "runs"  # the runs' own folders: where the jobs write
+    task = (*task[:5], str(run_dir))
     executor = submitit.AutoExecutor(folder=Path(folder) / "%j")
     executor.update_parameters(timeout_min=24 * 60, cpus_per_task=1, name="experiment",
                                **({"slurm_partition": partition} if partition else {}))
@@ -176,14 +208,15 @@ def first_step_at(steps, values, level):
     return int(steps[hit[0]]) if len(hit) else None
 
 
-def report(name, curves, solved=475.0, what="mean return of the last 20 episodes", panels=()):
-    """Print and save (docs/experiments/<name>.csv) per variant: the final value (`what`) and
-    the first step it reached `solved`, each as median [min, max] over seeds; draw
-    docs/experiments/<name>.png: the median curve and the band of the seeds. panels: (column,
-    label, log) of kept columns: each seed's median, min and max of it go into the CSV; printed,
-    the median [min, max] of the seeds' medians and the extremes of any seed; drawn below, the
-    same way as the curve."""
-    OUT.mkdir(parents=True, exist_ok=True)
+def report(name, curves, folder, solved=475.0, what="mean return of the last 20 episodes",
+           panels=()):
+    """Print and save (<folder>/<name>.csv) per variant: the final value (`what`) and the first
+    step it reached `solved`, each as median [min, max] over seeds; draw <folder>/<name>.png:
+    the median curve and the band of the seeds. panels: (column, label, log) of kept columns:
+    each seed's median, min and max of it go into the CSV; printed, the median [min, max] of
+    the seeds' medians and the extremes of any seed; drawn below, the same way as the curve."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
     rows = []
     print(f"\n{'variant':40} {'final':>26} {'steps to ' + str(int(solved)):>28}")
     for variant, runs in curves.items():
@@ -211,7 +244,7 @@ def report(name, curves, solved=475.0, what="mean return of the last 20 episodes
             print(f"{variant:40} {np.median(medians):10.4g} [{min(medians):.4g}, "
                   f"{max(medians):.4g}]; {min(r[f'{column}_min'] for r in seeds):.4g} to "
                   f"{max(r[f'{column}_max'] for r in seeds):.4g}")
-    with open(OUT / f"{name}.csv", "w", newline="") as f:
+    with common.written_whole(folder / f"{name}.csv") as tmp, open(tmp, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
@@ -234,7 +267,7 @@ def report(name, curves, solved=475.0, what="mean return of the last 20 episodes
             ax.set_yscale("log")
     axes[-1, 0].set_xlabel("env steps")
     fig.tight_layout()
-    return plots.save_whole(plt, fig, OUT / f"{name}.png", dpi=80)
+    return plots.save_whole(plt, fig, folder / f"{name}.png", dpi=80)
 
 
 def steps_median_and_range(hits):
@@ -261,54 +294,103 @@ def band(ax, runs, color, label=None):
     ax.plot(grid, np.median(values, 0), color=f"C{color}", lw=2, label=label)
 
 
+FLAGS = ("--quick", "--docs")  # the options without a value
+VALUED = {"--workers": "N", "--cluster": "FOLDER", "--partition": "NAME"}  # and with one
+OPTIONS = ("the options are --quick, --docs, --workers N (N >= 1) and --cluster FOLDER "
+           "[--partition NAME] (see --help)")
+
+
+def options(args):
+    """The command line (without --help): dict(quick, docs, workers (None: one per core),
+    cluster (None, or {"folder": ..., "partition": ...})). A mistake: one line, exit 2."""
+    given, args = {}, list(args)
+    while args:
+        flag, equals, value = args.pop(0).partition("=")
+        if flag not in FLAGS and flag not in VALUED:
+            close = difflib.get_close_matches(flag, [*FLAGS, *VALUED], n=1)
+            wrong(f"unknown argument {flag}{f' (did you mean {close[0]}?)' if close else ''}; "
+                  f"{OPTIONS}")
+        if flag in given:
+            wrong(f"{flag} given twice")
+        if flag in FLAGS and equals:
+            wrong(f"{flag} takes no value")
+        if flag in VALUED and not equals:
+            if not args or args[0].startswith("--"):
+                wrong(f"{flag} needs a value: {flag} {VALUED[flag]}")
+            value = args.pop(0)
+        given[flag] = value if flag in VALUED else True
+    workers = given.get("--workers")
+    if workers is not None and not (re.fullmatch("[0-9]+", workers) and int(workers) >= 1):
+        wrong(f"--workers {workers}: N, the runs at once, must be a whole number, 1 or more")
+    if "--partition" in given and "--cluster" not in given:
+        wrong("--partition NAME goes with --cluster FOLDER")
+    cluster = None if "--cluster" not in given else {
+        "folder": given["--cluster"],
+        **({"partition": given["--partition"]} if "--partition" in given else {})}
+    return dict(quick="--quick" in given, docs="--docs" in given,
+                workers=None if workers is None else int(workers), cluster=cluster)
+
+
+def wrong(message):
+    """A mistake on the command line: one line, exit 2."""
+    print(f"error: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
 def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=475.0,
          what="mean return of the last 20 episodes", quick_budget=2048, panels=(),
-         quick_settings=None, **settings):
+         quick_settings=None, more=None, **settings):
     """python experiments/<name>.py [--quick] [--docs] [--workers N] [--cluster FOLDER
-    [--partition NAME]]: every variant over
-    `seeds` at `budget` steps, then the table and the figure in runs/experiments/ (--docs:
+    [--partition NAME]]: every variant over `seeds` at `budget` steps, then the table and the
+    figure in runs/experiments/ of the folder it runs in (--docs: the repository's
     docs/experiments/, the committed ones). --quick: one seed, `quick_budget` steps (2048 for
-    CartPole, 2500 for DDPG), the figure in a temporary folder (the tests run it)."""
-    global OUT
-    args, workers = sys.argv[1:], os.cpu_count() or 1
-    if {"-h", "--help"} & set(args):
+    CartPole, 2500 for DDPG), the figure drawn in a temporary folder and removed (a smoke
+    test; the tests run it). more(curves, folder, settings): what else the experiment writes
+    there (returns their paths); settings: those of its runs, --quick's included.
+    Ctrl-C: exit 130 and one line, the runs that ended kept (a rerun goes on from them)."""
+    cores = os.cpu_count() or 1
+    if {"-h", "--help"} & set(sys.argv[1:]):
         print(sys.modules["__main__"].__doc__.strip())  # the experiment's question and what to see
-        print(f"\nWrites runs/experiments/{name}.png and {name}.csv; --docs writes "
-              f"docs/experiments/{name}.png and .csv instead (the committed ones: the same "
-              "numbers on the same machine); --quick writes to a temporary folder. --workers N: "
+        print(f"\nWrites runs/experiments/{name}.png and {name}.csv in the current folder; "
+              f"--docs writes the repository's docs/experiments/{name}.png and .csv instead "
+              "(the committed ones: the same numbers on the same machine); --quick writes "
+              "nothing (one seed, a few steps: it checks that the experiment runs). --workers N: "
               f"N runs at once, one process and one torch thread each (default: one per core, "
-              f"here {workers}); the numbers do not depend on it. --cluster FOLDER: each run a "
+              f"here {cores}); the numbers do not depend on it. --cluster FOLDER: each run a "
               "submitit job instead (Slurm where there is one, --partition NAME; else a local "
-              "process), its logs in FOLDER (pip install submitit).")
+              "process), its logs in FOLDER (pip install submitit). Ctrl-C: the runs that "
+              "ended are kept; the same command again goes on from there.")
         raise SystemExit(0)
-    cluster = None
-    for flag in ("--workers", "--cluster", "--partition"):
-        if flag in args[:-1] and not args[args.index(flag) + 1].startswith("--"):
-            at = args.index(flag)
-            value, args = args[at + 1], args[:at] + args[at + 2:]
-            if flag == "--workers":
-                workers = int(value) if value.isdigit() else 0
-            elif flag == "--cluster":
-                cluster = {**(cluster or {}), "folder": value}
-            else:
-                cluster = {**(cluster or {}), "partition": value}
-    bad_cluster = cluster is not None and "folder" not in cluster  # --partition alone
-    if (workers < 1 or not set(args) <= {"--quick", "--docs"} or len(set(args)) < len(args)
-            or bad_cluster):
-        print(f"error: unknown argument(s) {' '.join(sys.argv[1:])}; the options are --quick, "
-              "--docs, --workers N (N >= 1) and --cluster FOLDER [--partition NAME] (see "
-              "--help)", file=sys.stderr)
-        raise SystemExit(2)
-    quick = "--quick" in args
+    given = options(sys.argv[1:])
+    workers = given["workers"] or cores
     started = time.time()
-    OUT = DOCS if "--docs" in args else OUT
-    if quick:  # quick_settings: overrides of `settings` that a quick budget needs
+    if given["quick"]:  # quick_settings: overrides of `settings` that a quick budget needs
         seeds, budget, settings = seeds[:1], quick_budget, {**settings, **(quick_settings or {})}
-        OUT = Path(tempfile.mkdtemp(prefix="experiment_quick_"))
-    record = None if quick else OUT / f"{name}_runs"  # each run's log, kept as it ends
-    curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers, cluster,
-                 record, **settings)
-    path = report(name, curves, solved, what, panels)
+    with contextlib.ExitStack() as stack:
+        folder = (Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="experiment_")))
+                  if given["quick"] else DOCS if given["docs"] else OUT)
+        record = None if given["quick"] else folder / f"{name}_runs"  # each run's log, as it ends
+        try:
+            curves = run(script, variants, seeds, budget, [c for c, _, _ in panels], workers,
+                         given["cluster"], record, **settings)
+            paths = [report(name, curves, folder, solved, what, panels),
+                     *(more(curves, folder, settings) if more is not None else [])]
+        except KeyboardInterrupt:
+            print(f"\ninterrupted (Ctrl-C): {stopped(record, variants, seeds)}", file=sys.stderr)
+            raise SystemExit(130) from None
+        shown = ("not kept (--quick)" if given["quick"] else str(paths[0]) if len(paths) == 1
+                 else f"{paths[0]} (and {', '.join(map(str, paths[1:]))})")
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
-          f"{time.time() - started:.0f} s with {workers} worker(s); figure: {path}")
+          f"{time.time() - started:.0f} s with {workers} worker(s); figure: {shown}")
     return curves
+
+
+def stopped(record, variants, seeds):
+    """What an experiment stopped by Ctrl-C leaves, and how to go on: one line."""
+    if record is None:
+        return "--quick keeps nothing; run it again to start over"
+    kept, runs = kept_runs(record, variants, seeds), len(variants) * len(seeds)
+    if kept == runs:
+        return (f"all {runs} runs kept in {record}; the same command again draws the table "
+                "and the figure from them")
+    return f"{kept} of {runs} runs kept in {record}; the same command again goes on from there"

@@ -23,6 +23,7 @@ import lab  # noqa: F401  (first: it puts the scripts on the path)
 
 import csv
 
+import common
 import td3_walker
 
 
@@ -48,7 +49,7 @@ SETTINGS = dict(env_id="Walker2d-v5", start_steps=10_000, eval_every=5000, eval_
 def save_every_evaluation(curves, path):
     """Every evaluation of every run (variant, seed, step, return, Q, discounted return, their
     gap) in one CSV: the record behind the docs' figures of this experiment."""
-    with open(path, "w", newline="") as f:
+    with common.written_whole(path) as tmp, open(tmp, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["variant", "seed_index", "global_step", "eval_mean", "q_estimate",
                          "discounted_return", "gap"])
@@ -58,18 +59,20 @@ def save_every_evaluation(curves, path):
                 for step, value, qi, gi in zip(steps, values, q, g):
                     writer.writerow([variant, seed_index, int(step), f"{value:.6g}",
                                      f"{qi:.6g}", f"{gi:.6g}", f"{qi - gi:.6g}"])
+    return path
 
 
-def draw_gap(curves, path):
+def draw_gap(curves, path, start_steps):
     """The gap itself, Q(s, mu(s)) minus the discounted return obtained, per variant: the median
-    over the seeds and their band (min to max), from the first learned evaluation on."""
+    over the seeds and their band (min to max), from the first evaluation after the
+    `start_steps` of warm-up on."""
     plt = lab.plots.pyplot()
     fig, ax = plt.subplots(figsize=(10, 3.4))
     for color, (variant, runs) in enumerate(curves.items()):
         gaps = []
         for _, _, kept in runs:
             (steps, q), (_, g) = kept["q_estimate"], kept["discounted_return"]
-            after = steps > SETTINGS["start_steps"]  # the warm-up's untrained critic: left out
+            after = steps > start_steps  # the warm-up's untrained critic: left out
             gaps.append((steps[after], (q - g)[after]))
         lab.band(ax, gaps, color, f"{variant} (median of {len(runs)} seeds; band: min to max)")
     ax.axhline(0, color="k", lw=0.8)
@@ -81,9 +84,13 @@ def draw_gap(curves, path):
     return lab.plots.save_whole(plt, fig, path, dpi=80)
 
 
+def more(curves, folder, settings):
+    """Beside the table and the figure: every evaluation, and the gap drawn (their paths)."""
+    return [save_every_evaluation(curves, folder / "td3_fixes_evaluations.csv"),
+            draw_gap(curves, folder / "td3_fixes_gap.png", settings["start_steps"])]
+
+
 if __name__ == "__main__":
-    curves = lab.main("td3_fixes", td3_walker, VARIANTS, budget=50_000, solved=1000.0,
-                      what="evaluation return (no noise)", quick_budget=2500, panels=PANELS,
-                      quick_settings=dict(start_steps=1000, eval_every=2500), **SETTINGS)
-    save_every_evaluation(curves, lab.OUT / "td3_fixes_evaluations.csv")
-    print(f"the gap: {draw_gap(curves, lab.OUT / 'td3_fixes_gap.png')}")
+    lab.main("td3_fixes", td3_walker, VARIANTS, budget=50_000, solved=1000.0,
+             what="evaluation return (no noise)", quick_budget=2500, panels=PANELS,
+             quick_settings=dict(start_steps=1000, eval_every=2500), more=more, **SETTINGS)

@@ -1,6 +1,7 @@
 """The experiments: each variant differs from the original only as its docstring says, the
 code it replaces is put back after its runs, and each file runs in its quick mode."""
 
+import subprocess
 import sys
 from pathlib import Path
 
@@ -10,7 +11,7 @@ import torch
 
 import common
 import ppo_cartpole
-from conftest import ROOT, run_script
+from conftest import ROOT, interrupt_in_a_terminal, run_script
 from test_ppo_cartpole import batch
 
 sys.path.insert(0, str(ROOT / "experiments"))
@@ -189,18 +190,17 @@ def test_target_network_variants_are_only_the_setting_and_tau_1_copies():
     assert torch.equal(target.weight, source.weight) and torch.equal(target.bias, source.bias)
 
 
-def test_a_variant_may_run_another_script_and_keep_its_log_columns(tmp_path, monkeypatch):
+def test_a_variant_may_run_another_script_and_keep_its_log_columns(tmp_path):
     """lab.run: the variant's own script is trained, and the kept columns are its log's."""
     import ppo_kl_cartpole
 
-    monkeypatch.setattr(lab, "OUT", tmp_path)
     variants = {"original": {}, "variant": {"script": ppo_kl_cartpole}}
     curves = lab.run(ppo_cartpole, variants, (0,), 512, ["approx_kl", "beta", "lr"])
     assert set(curves["original"][0][2]) == {"approx_kl", "lr"}  # PPO-clip logs no beta
     assert set(curves["variant"][0][2]) == {"beta", "lr"}  # PPO-penalty logs no approx_kl
     steps, betas = curves["variant"][0][2]["beta"]
     assert len(steps) == len(betas) == 2 and betas[0] == 1.0  # 512 steps: two updates of 256
-    lab.report("x", curves, panels=[("lr", "learning rate", True)])
+    lab.report("x", curves, tmp_path, panels=[("lr", "learning rate", True)])
     rows = (tmp_path / "x.csv").read_text().splitlines()
     assert rows[0] == "variant,seed_index,final,steps_to_solved,lr_median,lr_min,lr_max"
     assert (tmp_path / "x.png").stat().st_size > 0
@@ -216,12 +216,19 @@ def test_swapped_puts_the_original_back_even_after_an_error():
 
 
 @pytest.mark.parametrize("name", [e for e in EXPERIMENTS if e != "advantage_normalization"])
-def test_each_experiment_runs_in_quick_mode(name):  # the other: in the workers' test below
-    p = run_script(f"experiments/{name}.py", "--quick", timeout=300)
+def test_each_experiment_runs_in_quick_mode_and_leaves_nothing(name, tmp_path):
+    """--quick, a smoke test, draws its figure aside and removes it: no runs/ where it ran,
+    no folder of ours left in the temporary folder (torch keeps its own cache there,
+    torchinductor_<user>). (advantage_normalization: see tiny() below.)"""
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    p = run_script(f"experiments/{name}.py", "--quick", timeout=300, cwd=tmp_path,
+                   env={"TMPDIR": str(temp)})
     assert p.returncode == 0, p.stderr
     lines = p.stdout.splitlines()
     assert any(line.startswith("original") for line in lines)
     assert any(line.startswith("variant") for line in lines)
+    assert not (tmp_path / "runs").exists() and not list(temp.glob("experiment_*"))
 
 
 def test_median_steps_count_the_seeds_that_never_got_there():
@@ -239,24 +246,106 @@ def test_help_prints_the_question_and_a_bad_argument_is_one_line():
     p = run_script("experiments/clip_or_penalty.py", "--qick", timeout=60)
     assert p.returncode == 2 and p.stdout == ""
     assert p.stderr.strip().splitlines() == [
-        "error: unknown argument(s) --qick; the options are --quick, --docs, --workers N "
-        "(N >= 1) and --cluster FOLDER [--partition NAME] (see --help)"]
+        "error: unknown argument --qick (did you mean --quick?); the options are --quick, "
+        "--docs, --workers N (N >= 1) and --cluster FOLDER [--partition NAME] (see --help)"]
+
+
+OPTIONS = ("the options are --quick, --docs, --workers N (N >= 1) and --cluster FOLDER "
+           "[--partition NAME] (see --help)")
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("args, message", [
+    (["--workers", "0"], "--workers 0: N, the runs at once, must be a whole number, 1 or more"),
+    (["--workers=0"], "--workers 0: N, the runs at once, must be a whole number, 1 or more"),
+    (["--workers", "-2"], "--workers -2: N, the runs at once, must be a whole number, 1 or more"),
+    (["--quick", "--workers", "two"],
+     "--workers two: N, the runs at once, must be a whole number, 1 or more"),
+    (["--workers", "1.5"], "--workers 1.5: N, the runs at once, must be a whole number, 1 or more"),
+    (["--workers"], "--workers needs a value: --workers N"),
+    (["--workers", "--quick"], "--workers needs a value: --workers N"),
+    (["--cluster"], "--cluster needs a value: --cluster FOLDER"),
+    (["--quick=yes"], "--quick takes no value"),
+    (["--partition", "cpu"], "--partition NAME goes with --cluster FOLDER"),
+    (["--quick", "--quick"], "--quick given twice"),
+    (["--worker", "2"], f"unknown argument --worker (did you mean --workers?); {OPTIONS}"),
+    (["--cluser", "jobs"], f"unknown argument --cluser (did you mean --cluster?); {OPTIONS}"),
+    (["quick"], f"unknown argument quick (did you mean --quick?); {OPTIONS}"),
+    (["--total-timesteps", "1000"], f"unknown argument --total-timesteps; {OPTIONS}"),
+])
+def test_a_bad_value_is_named_as_such_and_a_typo_gets_did_you_mean(args, message, capsys):
+    """The value is wrong, not the flag: say which; a flag close to one we have: name it."""
+    with pytest.raises(SystemExit) as stop:
+        lab.options(args)
+    assert stop.value.code == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.splitlines() == [f"error: {message}"]
+
+
+@pytest.mark.quick
+def test_the_options_that_are_right():
+    assert lab.options([]) == dict(quick=False, docs=False, workers=None, cluster=None)
+    assert lab.options(["--quick", "--workers", "3"]) == dict(quick=True, docs=False, workers=3,
+                                                              cluster=None)
+    assert lab.options(["--docs", "--cluster=jobs", "--partition", "cpu"]) == dict(
+        quick=False, docs=True, workers=None, cluster={"folder": "jobs", "partition": "cpu"})
+
+
+def tiny(folder, seeds, budget, name="tiny", saying=False):
+    """An experiment file of our own in `folder`: advantage_normalization's two variants,
+    `seeds` and `budget` of our choice (a real one's full run takes minutes). saying: each
+    update of a run prints "update done" (to the real stdout: the runs' own is silenced), so
+    that a test can tell when a run is inside its training loop; and after the table and the
+    figure, the experiment prints "writing more" and waits there for a Ctrl-C."""
+    script = folder / f"{name}.py"
+    script.write_text(
+        f'''"""Question: a tiny experiment, for the tests."""
+import sys
+import time
+sys.path.insert(0, {str(ROOT / "experiments")!r})
+import lab
+import advantage_normalization
+import ppo_cartpole
+
+UPDATE = ppo_cartpole.ppo_update
+
+
+def ppo_update_saying_so(*args):
+    stats = UPDATE(*args)
+    print("update done", file=sys.__stdout__, flush=True)
+    return stats
+
+
+def more_until_ctrl_c(curves, folder, settings):
+    print("writing more", flush=True)
+    while True:
+        time.sleep(0.01)
+
+
+VARIANTS, MORE = advantage_normalization.VARIANTS, None
+if {saying!r}:
+    VARIANTS = {{name: {{**variant, "swap": [(ppo_cartpole, "ppo_update", ppo_update_saying_so)]}}
+                for name, variant in VARIANTS.items()}}
+    MORE = more_until_ctrl_c
+lab.main({name!r}, ppo_cartpole, VARIANTS, seeds={tuple(seeds)!r}, budget={budget}, more=MORE)
+''')
+    return script
 
 
 def test_two_workers_give_the_same_csvs_byte_for_byte_as_one(tmp_path):
     """lab.run with --workers 2 runs each (variant, seed) in its own process: the numbers must
     be those of the runs one after another in one process."""
-    written = {}
+    script, written = tiny(tmp_path, (0, 1), 1024), {}
     for workers in (1, 2):
-        p = run_script("experiments/advantage_normalization.py", "--quick", "--workers",
-                       workers, timeout=300)
+        where = tmp_path / f"workers{workers}"
+        where.mkdir()
+        p = run_script(script, "--workers", workers, timeout=300, cwd=where)
         assert p.returncode == 0, p.stderr
-        folder = Path(p.stdout.rstrip().split("figure: ")[-1]).parent
         assert f"with {workers} worker(s)" in p.stdout
         lines = p.stdout.splitlines()
-        assert any(line.startswith("original") for line in lines)
-        assert any(line.startswith("variant") for line in lines)
-        written[workers] = (folder / "advantage_normalization.csv").read_bytes()
+        assert sum(line.startswith("original:") for line in lines) == 2 + 1  # runs, table
+        assert sum(line.startswith("variant:") for line in lines) == 2 + 1
+        written[workers] = (where / "runs" / "experiments" / "tiny.csv").read_bytes()
     assert written[1] == written[2]
 
 
@@ -264,14 +353,77 @@ def test_the_cluster_path_gives_the_same_csvs_through_submitits_local_executor(t
     """--cluster hands each run to submitit (Slurm where there is one; here its local
     executor, a process per job): the same numbers as the runs in this process."""
     pytest.importorskip("submitit", reason="the cluster path needs submitit (optional)")
-    written = {}
+    script, written = tiny(tmp_path, (0,), 2048), {}
     for how in (["--workers", "1"], ["--cluster", tmp_path / "jobs"]):
-        p = run_script("experiments/advantage_normalization.py", "--quick", *how, timeout=300)
+        where = tmp_path / how[0].strip("-")
+        where.mkdir()
+        p = run_script(script, *how, timeout=300, cwd=where)
         assert p.returncode == 0, p.stderr
-        folder = Path(p.stdout.rstrip().split("figure: ")[-1]).parent
-        written[how[0]] = (folder / "advantage_normalization.csv").read_bytes()
+        written[how[0]] = (where / "runs" / "experiments" / "tiny.csv").read_bytes()
     assert "2 jobs on local" in p.stdout
     assert written["--workers"] == written["--cluster"]
+
+
+def test_an_experiment_writes_to_runs_experiments_where_it_is_run(tmp_path, monkeypatch):
+    """As the scripts' runs/: the folder the command runs in, not the repository's."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "argv", ["elsewhere.py"])
+    name = "written_where_it_is_run"
+    lab.main(name, ppo_cartpole, {"original": {}}, seeds=(0,), budget=512)
+    out = tmp_path / "runs" / "experiments"
+    assert sorted(p.name for p in out.iterdir()) == [f"{name}.csv", f"{name}.png", f"{name}_runs"]
+    assert (out / f"{name}_runs" / "original__seed0" / "progress.csv").exists()
+    assert not (ROOT / "runs" / "experiments" / f"{name}.csv").exists()
+
+
+def test_the_workers_are_deaf_to_ctrl_c_from_the_first_to_the_last():
+    """A terminal's Ctrl-C reaches the workers too: each, the first ones and those the pool
+    forks later (from its own thread, one per run), has SIGINT blocked, so that the experiment
+    alone answers it; the experiment's own thread has it back."""
+    code = f"""
+import signal, sys
+sys.path.insert(0, {str(ROOT / "experiments")!r})
+import lab
+
+
+def blocked(_):
+    return signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+
+
+with lab.pool_deaf_to_ctrl_c(1) as pool:
+    print(pool.map(blocked, range(3), chunksize=1))  # three workers: one run each
+print(blocked(None))
+"""
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.splitlines() == ["[True, True, True]", "False"]
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ctrl_c_keeps_the_finished_runs_says_so_in_one_line_and_leaves_nothing_else(
+        workers, tmp_path):
+    """Ctrl-C, as a terminal sends it (to the workers too), once a run has been kept and
+    another is inside its training loop: exit 130, one line that says how many runs are kept
+    and how to go on; each kept run whole, the runs cut short not kept, no *.tmp, no
+    temporary folder of ours, no worker process left."""
+    script, temp = tiny(tmp_path, range(50), 512, saying=True), tmp_path / "temp"
+    temp.mkdir()
+    code, out, err, left = interrupt_in_a_terminal(script, "--workers", workers,
+                                                   after=("original", "update done"),
+                                                   cwd=tmp_path, env={"TMPDIR": str(temp)})
+    assert code == 130, (out, err)
+    assert not left  # no worker process outlives the experiment
+    record = tmp_path / "runs" / "experiments" / "tiny_runs"
+    kept = sorted(record.iterdir())
+    assert 1 <= len(kept) < 100
+    assert err.strip().splitlines() == [
+        f"interrupted (Ctrl-C): {len(kept)} of 100 runs kept in "
+        f"{Path('runs', 'experiments', 'tiny_runs')}; the same command again goes on from there"]
+    for run in kept:  # each whole: 512 steps are two updates of 256, two rows
+        assert [p.name for p in run.iterdir()] == ["progress.csv"]
+        assert len((run / "progress.csv").read_text().splitlines()) == 1 + 2, run
+    assert not list(tmp_path.rglob("*.tmp*")) and not list(temp.glob("experiment_*"))
+    assert not (tmp_path / "runs" / "experiments" / "tiny.csv").exists()
 
 
 def test_each_run_is_kept_as_it_ends_and_not_run_again(tmp_path, monkeypatch):
@@ -310,3 +462,28 @@ def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
     q1, q2 = torch.tensor([5.0, 5.0]), torch.tensor([3.0, 9.0])
     assert td3_fixes.td_target_of_q1_alone(r, nd, q1, q2, 0.5).tolist() == [3.5, 2.0]
     assert td3_walker.td_target(r, nd, q1, q2, 0.5).tolist() == [2.5, 2.0]
+
+
+def test_ctrl_c_after_the_last_run_says_all_are_kept(tmp_path):
+    """Ctrl-C once every run is kept (here: while the experiment writes what it adds to its
+    table and figure): one line that says so and how to get the rest, exit 130."""
+    script = tiny(tmp_path, (0,), 256, saying=True)
+    code, out, err, left = interrupt_in_a_terminal(script, "--workers", 1, after="writing more",
+                                                   cwd=tmp_path)
+    assert code == 130 and not left, (out, err)
+    assert err.strip().splitlines() == [
+        f"interrupted (Ctrl-C): all 2 runs kept in {Path('runs', 'experiments', 'tiny_runs')}; "
+        "the same command again draws the table and the figure from them"]
+    assert not list(tmp_path.rglob("*.tmp*"))
+
+
+def test_td3_fixes_writes_every_evaluation_and_the_gap_after_its_runs_warm_up(tmp_path):
+    """The gap is drawn from the evaluations after the warm-up of the runs as they were run
+    (--quick's is 1000 steps, not 10,000: its one evaluation, at 2500, is after it)."""
+    steps = np.array([2500.0])
+    one = (steps, np.array([100.0]), {"q_estimate": (steps, np.array([5.0])),
+                                      "discounted_return": (steps, np.array([3.0]))})
+    curves = {name: [one] for name in td3_fixes.VARIANTS}
+    table, gap = td3_fixes.more(curves, tmp_path, {"start_steps": 1000})
+    assert table.read_text().splitlines()[1] == "DDPG: no fix,0,2500,100,5,3,2"  # gap: 5 - 3
+    assert gap.stat().st_size > 0 and not list(tmp_path.glob("*.tmp*"))
