@@ -16,17 +16,21 @@ the script itself has no branch and no flag for it.
 
 import argparse
 import contextlib
+import copy
 import csv
 import importlib
 import importlib.util
 import inspect
 import io
 import math
+import os
 import sys
 import tempfile
 import time
 from pathlib import Path
 from types import SimpleNamespace
+
+from torch.distributions import Categorical, kl_divergence  # noqa: E402  (the mistakes' values)
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
@@ -38,6 +42,22 @@ import common  # noqa: E402
 from lab import DDPG_IN_MINUTES, swapped  # noqa: E402
 
 NOT_WRITTEN = "not written yet"
+
+# The messages' language: --lang zh|en, else the locale (LC_ALL, LC_MESSAGES, LANG: zh_CN.UTF-8
+# and the like give Chinese), else English. The terms are those of README.zh-CN.md's glossary.
+LANG = "en"
+
+
+def locale_lang():
+    for var in ("LC_ALL", "LC_MESSAGES", "LANG"):
+        if os.environ.get(var):
+            return "zh" if os.environ[var].lower().startswith("zh") else "en"
+    return "en"
+
+
+def tr(en, zh):
+    """The message in the learner's language."""
+    return zh if LANG == "zh" else en
 
 
 class Failed(Exception):
@@ -60,11 +80,13 @@ def flags(*rows):
 
 
 class Fixed(torch.nn.Module):
-    """A 'network' that returns the same outputs for any batch of observations."""
+    """A 'network' that returns the same outputs for any batch of observations; `names` say
+    what each output is, for the messages about its gradient."""
 
-    def __init__(self, *outputs):
+    def __init__(self, *outputs, names=()):
         super().__init__()
         self.outputs = [torch.nn.Parameter(o.clone()) for o in outputs]
+        self.names = list(names) + [f"output {i}" for i in range(len(names), len(outputs))]
         for i, p in enumerate(self.outputs):
             self.register_parameter(f"out{i}", p)
 
@@ -78,15 +100,20 @@ def returns_cases():
     at1 = flags([False, False], [True, True], [False, False])
     env0 = flags([False, False], [True, False], [False, False])
     return [
-        ("no episode ends: bootstrap with V(s_3) = 4 at the rollout's end",
+        (tr("no episode ends: bootstrap with V(s_3) = 4 at the rollout's end",
+            "没有回合结束：在 rollout 的末尾用 V(s_3) = 4 自举"),
          (r, v, no, no, 0.5), t([2.25, 2.25], [2.5, 2.5], [3.0, 3.0])),
-        ("terminated at t = 1 (both envs): no future after it",
+        (tr("terminated at t = 1 (both envs): no future after it",
+            "t = 1 处终止（两个环境都是）：之后没有未来"),
          (r, v, at1, no, 0.5), t([1.5, 1.5], [1.0, 1.0], [3.0, 3.0])),
-        ("truncated at t = 1 (a time limit): bootstrap with V(final obs) = 9 there",
+        (tr("truncated at t = 1 (a time limit): bootstrap with V(final obs) = 9 there",
+            "t = 1 处时间截断：在那里用 V(最后的观测) = 9 自举"),
          (r, v, no, at1, 0.5), t([3.75, 3.75], [5.5, 5.5], [3.0, 3.0])),
-        ("terminated and truncated at once: termination wins",
+        (tr("terminated and truncated at once: termination wins",
+            "同一步既终止又时间截断：按终止算"),
          (r, v, at1, at1, 0.5), t([1.5, 1.5], [1.0, 1.0], [3.0, 3.0])),
-        ("env 0 truncated at t = 1, env 1 not: each column on its own",
+        (tr("env 0 truncated at t = 1, env 1 not: each column on its own",
+            "t = 1 处环境 0 时间截断，环境 1 没有：每一列各算各的"),
          (r, v, no, env0, 0.5), t([3.75, 2.25], [5.5, 2.5], [3.0, 3.0])),
     ]
 
@@ -96,75 +123,98 @@ def gae_cases():
     no, at0 = flags([False, False], [False, False]), flags([True, True], [False, False])
     env1 = flags([False, True], [False, False])
     return [
-        ("lam = 1, no episode ends: A_1 = delta_1 = 1, A_0 = delta_0 + 0.5 * A_1",
+        (tr("lam = 1, no episode ends: A_1 = delta_1 = 1, A_0 = delta_0 + 0.5 * A_1",
+            "lam = 1，没有回合结束：A_1 = delta_1 = 1，A_0 = delta_0 + 0.5 * A_1"),
          (r, v, nv, no, no, 0.5, 1.0), t([1.5, 1.5], [1.0, 1.0])),
-        ("lam = 0.5: A_0 = delta_0 + gamma * lam * A_1 = 1 + 0.25",
+        (tr("lam = 0.5: A_0 = delta_0 + gamma * lam * A_1 = 1 + 0.25",
+            "lam = 0.5：A_0 = delta_0 + gamma * lam * A_1 = 1 + 0.25"),
          (r, v, nv, no, no, 0.5, 0.5), t([1.25, 1.25], [1.0, 1.0])),
-        ("terminated at t = 0: delta_0 = r_0 - V(s_0) = 0, and A_1 (a new episode) not added",
+        (tr("terminated at t = 0: delta_0 = r_0 - V(s_0) = 0, and A_1 (a new episode) not added",
+            "t = 0 处终止：delta_0 = r_0 - V(s_0) = 0，A_1（新回合的）不加进来"),
          (r, v, nv, at0, no, 0.5, 1.0), t([0.0, 0.0], [1.0, 1.0])),
-        ("truncated at t = 0: delta_0 keeps gamma * V(final obs) = 1, A_1 not added",
+        (tr("truncated at t = 0: delta_0 keeps gamma * V(final obs) = 1, A_1 not added",
+            "t = 0 处时间截断：delta_0 保留 gamma * V(最后的观测) = 1，A_1 不加进来"),
          (r, v, nv, no, at0, 0.5, 1.0), t([1.0, 1.0], [1.0, 1.0])),
-        ("env 1 truncated at t = 0, env 0 not: each column on its own",
+        (tr("terminated and truncated at once at t = 0: termination wins, delta_0 = 0",
+            "t = 0 处同时终止和时间截断：按终止算，delta_0 = 0"),
+         (r, v, nv, at0, at0, 0.5, 1.0), t([0.0, 0.0], [1.0, 1.0])),
+        (tr("env 1 truncated at t = 0, env 0 not: each column on its own",
+            "t = 0 处环境 1 时间截断，环境 0 没有：每一列各算各的"),
          (r, v, nv, no, env1, 0.5, 1.0), t([1.5, 1.0], [1.0, 1.0])),
     ]
 
 
+def logits_names():
+    return (tr("pi's logits", "π 的 logits"),)
+
+
 def clip_cases():
-    # pi = (0.5, 0.5) everywhere; pi_old of the taken action 0.25 or 1: r = 2 or 0.5.
-    policy = Fixed(t([0.0, 0.0]).expand(4, 2))
-    data = dict(obs=torch.zeros(4, 1), act=torch.tensor([0, 0, 1, 1]),
-                adv=t(1.0, -1.0, 1.0, -1.0), logp=torch.log(t(0.25, 0.25, 1.0, 1.0)))
-    # min(r A, clip(r, 0.8, 1.2) A): 1.2, -2, 0.5, -0.8; the loss is minus their mean: 0.275
-    return [("r = 2, 2, 0.5, 0.5 against A = 1, -1, 1, -1; eps = 0.2",
-             (policy, data, 0.2), (scalar(0.275), None, None))]
+    # pi = (0.5, 0.5) everywhere; pi_old of the taken action 0.25, 0.8 or 0.45, so the ratios
+    # r = 2, 0.625, 1.111 are not reciprocal pairs: exp(logp_old - logp) gives other values.
+    policy = Fixed(t([0.0, 0.0]).expand(6, 2), names=logits_names())
+    data = dict(obs=torch.zeros(6, 1), act=torch.tensor([0, 0, 1, 1, 0, 1]),
+                adv=t(1.0, -1.0, 1.0, -1.0, 2.0, -3.0),
+                logp=torch.log(t(0.25, 0.25, 0.8, 0.8, 0.45, 0.45)))
+    # min(r A, clip(r, 0.8, 1.2) A) per sample: min(2, 1.2) = 1.2; min(-2, -1.2) = -2;
+    # min(0.625, 0.8) = 0.625; min(-0.625, -0.8) = -0.8; r = 10/9 inside the band: 20/9, -30/9.
+    # The loss is minus their mean.
+    terms = [1.2, -2.0, 0.625, -0.8, 20 / 9, -30 / 9]
+    return [(tr("r = 2, 2, 0.625, 0.625, 10/9, 10/9 against A = 1, -1, 1, -1, 2, -3; eps = 0.2",
+                "r = 2, 2, 0.625, 0.625, 10/9, 10/9，A = 1, -1, 1, -1, 2, -3；eps = 0.2"),
+             (policy, data, 0.2), (scalar(-sum(terms) / 6), None, None))]
 
 
 def kl_cases():
     # pi = (0.5, 0.5), pi_old = (0.25, 0.75): r = 2 for action 0, 2/3 for action 1.
-    policy = Fixed(t([0.0, 0.0]).expand(2, 2))
+    policy = Fixed(t([0.0, 0.0]).expand(2, 2), names=logits_names())
     logits_old = torch.log(t([0.25, 0.75], [0.25, 0.75]))
     data = dict(obs=torch.zeros(2, 1), act=torch.tensor([0, 1]), adv=t(1.0, -1.0),
                 logp=torch.log(t(0.25, 0.75)), logits_old=logits_old)
     kl = 0.25 * math.log(0.25 / 0.5) + 0.75 * math.log(0.75 / 0.5)  # KL(pi_old || pi)
     surrogate = (2.0 * 1.0 + (2 / 3) * -1.0) / 2
-    return [(f"beta = {beta}: -mean(r A) + beta KL(pi_old || pi), KL = {kl:.4f}",
+    return [(tr(f"beta = {beta}: -mean(r A) + beta KL(pi_old || pi), KL = {kl:.4f}",
+                f"beta = {beta}：-mean(r A) + beta KL(pi_old || pi)，KL = {kl:.4f}"),
              (policy, data, beta), (scalar(-surrogate + beta * kl), None, None))
             for beta in (0.0, 2.0)]
 
 
 def beta_cases():
     cfg = SimpleNamespace(d_targ=0.01, kl_tolerance=1.5, beta_factor=2.0)
-    return [(f"beta = 1, d = {d:g} (d_targ = 0.01, tolerance 1.5, factor 2)", (1.0, d, cfg),
+    return [(tr(f"beta = 1, d = {d:g} (d_targ = 0.01, tolerance 1.5, factor 2)",
+                f"beta = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, cfg),
              expected) for d, expected in ((0.001, 0.5), (0.02, 2.0), (0.01, 1.0),
                                            (0.01 / 1.5, 1.0), (0.01 * 1.5, 1.0))]
 
 
 def a2c_cases():
-    # pi = (0.5, 0.5): log pi(a|s) = -ln 2, entropy ln 2; V = (1, 2); R = (2, 2.5); A = R - V
-    model = Fixed(t([0.0, 0.0]).expand(2, 2), t(1.0, 2.0))
-    data = dict(obs=torch.zeros(2, 1), act=torch.tensor([0, 1]), adv=t(1.0, 0.5),
+    # pi = (0.5, 0.5): log pi(a|s) = -ln 2, entropy ln 2; V = (1, 2); R = (2, 2.5). The
+    # advantages given, (0.5, -1), are not R - V = (1, 0.5): an answer that recomputes A
+    # from the critic gets another loss_pi (and sends the actor's gradient into V).
+    model = Fixed(t([0.0, 0.0]).expand(2, 2), t(1.0, 2.0),
+                  names=(tr("pi's logits", "π 的 logits"), tr("V(s)", "V(s)")))
+    data = dict(obs=torch.zeros(2, 1), act=torch.tensor([0, 1]), adv=t(0.5, -1.0),
                 ret=t(2.0, 2.5))
     cfg = SimpleNamespace(vf_coef=0.5, ent_coef=0.01)
-    loss_pi, loss_v, entropy = math.log(2) * 0.75, 0.5 * (1.0 + 0.25) / 2, math.log(2)
+    loss_pi, loss_v, entropy = math.log(2) * (0.5 - 1.0) / 2, 0.5 * (1.0 + 0.25) / 2, math.log(2)
     loss = loss_pi + 0.5 * loss_v - 0.01 * entropy
-    return [("A = (1, 0.5), R - V = (1, 0.5); c1 = 0.5, c2 = 0.01", (model, data, cfg),
+    return [(tr("A = (0.5, -1) as given (not R - V = (1, 0.5)); c1 = 0.5, c2 = 0.01",
+                "A = (0.5, -1)，照给的用（不是 R - V = (1, 0.5)）；c1 = 0.5，c2 = 0.01"),
+             (model, data, cfg),
              (scalar(loss), dict(loss_pi=loss_pi, loss_v=loss_v, entropy=entropy)))]
 
 
 def td_cases():
-    return [("r = (1, 2, 3), terminated at the second, Q' = (10, 10, -4), gamma = 0.9",
+    return [(tr("r = (1, 2, 3), terminated at the second, Q' = (10, 10, -4), gamma = 0.9",
+                "r = (1, 2, 3)，第二个终止，Q' = (10, 10, -4)，gamma = 0.9"),
              (t(1.0, 2.0, 3.0), t(1.0, 0.0, 1.0), t(10.0, 10.0, -4.0), 0.9), t(10.0, 2.0, -0.6))]
 
 
 def actor_cases():
-    actor = Fixed(t([2.0], [4.0]))  # mu(s) for the two states
+    actor = Fixed(t([2.0], [4.0]), names=(tr("mu(s)", "mu(s)"),))  # mu(s) for the two states
     critic = lambda obs, action: (obs * action).sum(-1)  # noqa: E731  Q(s, a) = s . a
-    return [("mu(s) = (2, 4) at s = (1, 2), Q(s, a) = s * a: Q(s, mu(s)) = (2, 8)",
+    return [(tr("mu(s) = (2, 4) at s = (1, 2), Q(s, a) = s * a: Q(s, mu(s)) = (2, 8)",
+                "s = (1, 2) 处 mu(s) = (2, 4)，Q(s, a) = s * a：Q(s, mu(s)) = (2, 8)"),
              (actor, critic, t([1.0], [2.0])), scalar(-5.0))]
-
-
-def soft_cases():
-    return [("theta' = 0, theta = 1, tau = 0.1, twice: 0.1, then 0.19", None, None)]
 
 
 def check_soft_update(fn):
@@ -178,12 +228,19 @@ def check_soft_update(fn):
         fn(target, source, 0.1)
         got = [round(float(x), 6) for p in target.parameters() for x in p.detach().flatten()]
         if got != [expected] * 3:
-            raise Failed(f"target's weights and bias after soft_update: expected {expected} "
-                         f"each (theta' = tau * theta + (1 - tau) * theta'), got {got}")
+            raise Failed(tr(
+                f"case: theta' = 0, theta = 1, tau = 0.1, twice: 0.1, then 0.19\n  target's "
+                f"weights and bias after soft_update: expected {expected} each (theta' = tau * "
+                f"theta + (1 - tau) * theta'), got {got}",
+                f"例子：theta' = 0，theta = 1，tau = 0.1，做两次：先 0.1，再 0.19\n  软更新后目标网络的"
+                f"权重和偏置：应该都是 {expected}（theta' = tau * theta + (1 - tau) * theta'），"
+                f"得到的是 {got}"))
     if [id(p) for p in target.parameters()] != before:
-        raise Failed("the target's parameters were replaced, not updated in place")
+        raise Failed(tr("the target's parameters were replaced, not updated in place",
+                        "目标网络的参数被换成了新的张量，而不是原地更新"))
     if [float(x) for p in source.parameters() for x in p.detach().flatten()] != [1.0] * 3:
-        raise Failed("soft_update changed the source network; only the target moves")
+        raise Failed(tr("soft_update changed the source network; only the target moves",
+                        "soft_update 改了原网络；应该只动目标网络"))
 
 
 def compare(name, got, expected):
@@ -196,22 +253,34 @@ def compare(name, got, expected):
         return
     if torch.is_tensor(expected):
         if not torch.is_tensor(got):
-            raise Failed(f"{name}: expected a tensor of shape {tuple(expected.shape)}, got "
-                         f"{type(got).__name__} {got!r}")
+            raise Failed(tr(f"{name}: expected a tensor of shape {tuple(expected.shape)}, got "
+                            f"{type(got).__name__} {got!r}",
+                            f"{name}：应该是形状为 {tuple(expected.shape)} 的张量，得到的是 "
+                            f"{type(got).__name__} {got!r}"))
         if got.shape != expected.shape:
-            raise Failed(f"{name}: expected shape {tuple(expected.shape)}, got "
-                         f"{tuple(got.shape)} (a (B, 1) against a (B,) broadcasts silently)")
+            raise Failed(tr(f"{name}: expected shape {tuple(expected.shape)}, got "
+                            f"{tuple(got.shape)} (a (B, 1) against a (B,) broadcasts silently)",
+                            f"{name}：形状应该是 {tuple(expected.shape)}，得到的是 "
+                            f"{tuple(got.shape)}（(B, 1) 和 (B,) 相减会悄悄广播成 (B, B)）"))
         close = torch.isclose(got.detach().float(), expected, atol=1e-5, rtol=1e-5)
+        if not close.all() and expected.dim() == 0:
+            raise Failed(tr(f"{name}: expected {expected.item():.6g}, got {got.item():.6g}",
+                            f"{name}：应该是 {expected.item():.6g}，得到的是 {got.item():.6g}"))
         if not close.all():
             wrong = [tuple(int(k) for k in i) for i in (~close).nonzero()]
             i = wrong[0]
-            also = f" (all that differ: {', '.join(map(str, wrong[:8]))})" if len(wrong) > 1 else ""
-            raise Failed(f"{name}: first difference at index {i}: expected "
-                         f"{expected[i].item():.6g}, got {got[i].item():.6g}{also}\n  expected "
-                         f"{rounded(expected)}\n  got      {rounded(got)}")
+            also = (tr(" (all that differ: ", "（所有不同的位置：") + ", ".join(map(str, wrong[:8]))
+                    + tr(")", "）")) if len(wrong) > 1 else ""
+            raise Failed(tr(f"{name}: first difference at index {i}: expected "
+                            f"{expected[i].item():.6g}, got {got[i].item():.6g}{also}",
+                            f"{name}：第一个不同在下标 {i}：应该是 {expected[i].item():.6g}，"
+                            f"得到的是 {got[i].item():.6g}{also}")
+                         + tr("\n  expected ", "\n  应该是 ") + str(rounded(expected))
+                         + tr("\n  got      ", "\n  得到的 ") + str(rounded(got)))
         return
     if not isinstance(got, (int, float)) or abs(float(got) - float(expected)) > 1e-5:
-        raise Failed(f"{name}: expected {expected:.6g}, got {got!r}")
+        raise Failed(tr(f"{name}: expected {expected:.6g}, got {got!r}",
+                        f"{name}：应该是 {expected:.6g}，得到的是 {got!r}"))
 
 
 def rounded(x):
@@ -228,11 +297,73 @@ def show(ex, args):
         if isinstance(a, dict):
             return "{" + ", ".join(f"{k}: {one(v)}" for k, v in a.items() if k != "obs") + "}"
         if torch.is_tensor(a):
-            return str(a.tolist() if a.dtype == torch.bool else rounded(a))
+            return str(a.tolist() if not a.is_floating_point() else rounded(a))
         return repr(a)
     names = inspect.signature(getattr(ex.owner(), ex.function)).parameters
     return ", ".join(f"{name}={one(a)}" for name, a in zip(names, args)
                      if not callable(a) and not isinstance(a, SimpleNamespace))
+
+
+def gradients(f, args):
+    """{network output's name: its gradient} after backward() of f(*args)'s loss (its first
+    output), on copies of the case's inputs; None if the loss carries no gradient at all."""
+    args = copy.deepcopy(args)
+    out = f(*args)
+    loss = out[0] if isinstance(out, tuple) else out
+    if not (torch.is_tensor(loss) and loss.requires_grad):
+        return None
+    loss.backward()
+    return {name: torch.zeros_like(p) if p.grad is None else p.grad
+            for a in args if isinstance(a, Fixed) for name, p in zip(a.names, a.outputs)}
+
+
+def compare_gradients(ex, fn, args):
+    """Where values cannot tell, the gradient can: the loss's gradient with respect to each
+    network output of the case, yours against the script's own function's."""
+    if not any(isinstance(a, Fixed) for a in args):
+        return
+    reference, yours = gradients(getattr(ex.owner(), ex.function), args), gradients(fn, args)
+    if reference is None:
+        return
+    if yours is None:
+        raise Failed(tr(
+            "gradient cut: your loss has the right value and carries no gradient at all (it was "
+            "computed\n  under torch.no_grad(), from .item() or .detach(), or from a tensor made "
+            "anew): the optimizer\n  would change nothing",
+            "梯度被切断：你的损失数值对，但完全不带梯度（它是在 torch.no_grad() 下算的，或经过了 "
+            ".item()、\n  .detach()，或由新建的张量算出）：优化器什么也改不了"))
+    for name, r in reference.items():
+        g = yours[name]
+        if torch.allclose(g, r, atol=1e-6, rtol=1e-4):
+            continue
+        if r.abs().max() > 1e-8 and g.abs().max() <= 1e-8:
+            raise Failed(tr(
+                f"gradient cut: the value is right, and no gradient reaches {name} (a .detach(), "
+                f"or a tensor made\n  anew, on the way from {name} to the loss): expected "
+                f"{rounded(r)}, got zeros",
+                f"梯度被切断：数值对，但梯度传不到 {name}（从 {name} 到损失的路上有 .detach() "
+                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0"))
+        if r.abs().max() <= 1e-8:
+            raise Failed(tr(
+                f"a gradient where none belongs: the value is right, and your loss sends a gradient "
+                f"into {name},\n  which this loss must not train (a quantity that should be a "
+                f"constant, e.g. an advantage\n  recomputed from the live network, carries it): "
+                f"got {rounded(g)}, expected zeros",
+                f"多出来的梯度：数值对，但你的损失把梯度传进了 {name}，这个损失不该训练它（本该是常数的"
+                f"量带着梯度，\n  例如用正在训练的网络重新算的优势）：得到 {rounded(g)}，应该是 0"))
+        if torch.allclose(g, -r, atol=1e-6, rtol=1e-4):
+            raise Failed(tr(
+                f"gradient reversed: the value is right, and the gradient with respect to {name} "
+                f"has the\n  opposite sign: training would move it the wrong way: expected "
+                f"{rounded(r)}, got {rounded(g)}",
+                f"梯度方向反了：数值对，但对 {name} 的梯度符号相反，训练会把它往反方向推：\n  应该是 "
+                f"{rounded(r)}，得到的是 {rounded(g)}"))
+        raise Failed(tr(
+            f"wrong gradient: the value is right, and the gradient with respect to {name} is "
+            f"not the loss's:\n  expected {rounded(r)}, got {rounded(g)} (a term that should "
+            f"be a constant, or one cut\n  from the graph, changes it)",
+            f"梯度不对：数值对，但对 {name} 的梯度不是这个损失的梯度：\n  应该是 {rounded(r)}，得到的是 "
+            f"{rounded(g)}（某一项该是常数却带着梯度，或者该带梯度却被切断了）"))
 
 
 def worked_cases(ex, fn):
@@ -243,17 +374,193 @@ def worked_cases(ex, fn):
         got = fn(*args)
         for a, b in zip(args, saved):
             if torch.is_tensor(a) and not torch.equal(a, b):
-                raise Failed(f"{what}: your function changed one of its inputs in place")
+                raise Failed(tr(f"{what}: your function changed one of its inputs in place",
+                                f"{what}：你的函数原地改了它的一个输入"))
         try:
             if isinstance(expected, tuple):
                 if not isinstance(got, tuple) or len(got) < len(expected):
-                    raise Failed(f"expected a tuple of {len(expected)}, got {type(got).__name__}")
+                    raise Failed(tr(f"expected a tuple of {len(expected)}, got "
+                                    f"{type(got).__name__}",
+                                    f"应该返回 {len(expected)} 个值的元组，得到的是 "
+                                    f"{type(got).__name__}"))
                 for i, e in enumerate(expected):
                     compare(ex.outputs[i], got[i], e)
             else:
                 compare(ex.outputs[0], got, expected)
+            compare_gradients(ex, fn, args)
         except Failed as e:
-            raise Failed(f"case: {what}\n  input: {show(ex, args)}\n  {e}") from None
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
+                         + f"{show(ex, args)}\n  {e}{named_mistake(ex, args, got)}") from None
+
+
+# ==== Known mistakes: where a wrong value is exactly what a named mistake gives, say so =========
+
+
+def returns_with(r, nv, term, trunc, gamma, cut=True, trunc_boots=True, term_wins=True,
+                 term_resets=True):
+    out, future = torch.zeros_like(r), (nv[-1] if cut else torch.zeros_like(r[0]))
+    zero = torch.zeros_like(r[0])
+    for t in reversed(range(len(r))):
+        boot = nv[t] if trunc_boots else zero
+        ended = term[t] if term_resets else torch.zeros_like(term[t])
+        if term_wins:
+            future = torch.where(ended, zero, torch.where(trunc[t], boot, future))
+        else:
+            future = torch.where(trunc[t], boot, torch.where(ended, zero, future))
+        out[t] = future = r[t] + gamma * future
+    return out
+
+
+def gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=True, cut_at_trunc=True,
+             term_wins=True, next_v=True, term_resets=True):
+    adv, last = torch.zeros_like(r), torch.zeros_like(r[0])
+    for t in reversed(range(len(r))):
+        boots = ~term[t] if term_wins else (~term[t] | trunc[t])
+        boots = boots & ~trunc[t] if not trunc_boots else boots
+        keep = ~(term[t] | trunc[t]) if cut_at_trunc else ~term[t]
+        keep = keep if term_resets else torch.ones_like(keep)
+        delta = r[t] + gamma * (nv[t] if next_v else v[t]) * boots.float() - v[t]
+        last = adv[t] = delta + gamma * lam * keep.float() * last
+    return adv
+
+
+def returns_mistakes(r, nv, term, trunc, gamma):
+    return [(tr("no bootstrap at the rollout's end (after step T - 1 the future is V(s_T), not 0)",
+                "rollout 末尾没有自举（第 T - 1 步之后的未来是 V(s_T)，不是 0）"),
+             returns_with(r, nv, term, trunc, gamma, cut=False)),
+            (tr("a time-limit truncation treated as a termination (no bootstrap there)",
+                "把时间截断当成了终止（那里没有自举）"),
+             returns_with(r, nv, term, trunc, gamma, trunc_boots=False)),
+            (tr("truncation wins where both flags are set (termination must win)",
+                "两个标志都在时按截断算了（应该按终止算）"),
+             returns_with(r, nv, term, trunc, gamma, term_wins=False)),
+            (tr("the future is not reset where an episode terminated (the next episode's "
+                "rewards leak in)", "回合终止处没有把未来清零（下一个回合的奖励漏了进来）"),
+             returns_with(r, nv, term, trunc, gamma, term_resets=False))]
+
+
+def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
+    return [(tr("a time-limit truncation treated as a termination in delta (no bootstrap there)",
+                "在 delta 里把时间截断当成了终止（那里没有自举）"),
+             gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=False)),
+            (tr("the sum runs on past a truncation (what follows belongs to the next episode)",
+                "累加越过了时间截断（后面属于下一个回合）"),
+             gae_with(r, v, nv, term, trunc, gamma, lam, cut_at_trunc=False)),
+            (tr("truncation wins where both flags are set: delta bootstraps at a termination",
+                "两个标志都在时按截断算了：终止处的 delta 还在自举"),
+             gae_with(r, v, nv, term, trunc, gamma, lam, term_wins=False)),
+            (tr("lam left out of the sum (gamma * A_{t+1}, not gamma * lam * A_{t+1})",
+                "累加时漏了 lam（写成了 gamma * A_{t+1}，应该是 gamma * lam * A_{t+1}）"),
+             gae_with(r, v, nv, term, trunc, gamma, 1.0)),
+            (tr("V(s_t) where V(s_{t+1}) belongs in delta (values[t], not next_values[t])",
+                "delta 里用了 V(s_t)，应该是 V(s_{t+1})（用了 values[t]，不是 next_values[t]）"),
+             gae_with(r, v, nv, term, trunc, gamma, lam, next_v=False)),
+            (tr("the sum is not cut where an episode ended", "回合结束处没有切断累加"),
+             gae_with(r, v, nv, term, trunc, gamma, lam, term_resets=False))]
+
+
+def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False):
+    logp = Categorical(logits=policy(data["obs"])).log_prob(data["act"]).detach()
+    r = torch.exp(data["logp"] - logp) if inverted else torch.exp(logp - data["logp"])
+    a = data["adv"]
+    if clip_product:
+        return -(r * a).clamp(1 - eps, 1 + eps).mean()
+    return -(torch.max if use_max else torch.min)(r * a, r.clamp(1 - eps, 1 + eps) * a).mean()
+
+
+def clip_mistakes(policy, data, eps):
+    right = surrogate(policy, data, eps)
+    return [(tr("the ratio upside down: pi_old / pi, exp(logp_old - logp)",
+                "比值倒过来了：pi_old / pi，即 exp(logp_old - logp)"),
+             surrogate(policy, data, eps, inverted=True)),
+            (tr("max where the pessimistic bound takes min", "用了 max，悲观的下界要取 min"),
+             surrogate(policy, data, eps, use_max=True)),
+            (tr("the product r * A clipped, not the ratio r", "裁剪了乘积 r * A，而不是比值 r"),
+             surrogate(policy, data, eps, clip_product=True)),
+            (tr("the sign: the objective L_CLIP returned, where the loss is -L_CLIP",
+                "符号反了：返回的是目标 L_CLIP，损失应该是 -L_CLIP"), -right),
+            (tr("a sum over the batch where the mean belongs", "对批量求了和，应该求均值"),
+             right * len(data["adv"]))]
+
+
+def kl_mistakes(policy, data, beta):
+    dist = Categorical(logits=policy(data["obs"]).detach())
+    old = Categorical(logits=data["logits_old"])
+    r = torch.exp(dist.log_prob(data["act"]) - data["logp"])
+    s, kl, reverse = (r * data["adv"]).mean(), kl_divergence(old, dist).mean(), kl_divergence(
+        dist, old).mean()
+    return [(tr("the KL the other way round: KL(pi || pi_old); kl_divergence(p, q) is KL(p || q)",
+                "KL 的方向反了：写成了 KL(pi || pi_old)；kl_divergence(p, q) 是 KL(p || q)"),
+             -s + beta * reverse),
+            (tr("the surrogate's sign: +mean(r A) where the loss has -mean(r A)",
+                "代理目标的符号反了：损失里应该是 -mean(r A)"), s + beta * kl),
+            (tr("the penalty's sign: - beta * KL where the loss adds it",
+                "惩罚项的符号反了：损失里应该加上 beta * KL"), -s - beta * kl)]
+
+
+def a2c_mistakes(model, data, cfg):
+    logits, values = (x.detach() for x in model(data["obs"]))
+    dist = Categorical(logits=logits)
+    logp, ent = dist.log_prob(data["act"]), dist.entropy().mean()
+    loss_pi, loss_v = -(logp * data["adv"]).mean(), 0.5 * ((values - data["ret"]) ** 2).mean()
+    return [(tr("A recomputed as R - V from the critic, where data[\"adv\"] is given (a constant)",
+                "用评论员重新算了 A = R - V，应该直接用给的 data[\"adv\"]（常数）"),
+             -(logp * (data["ret"] - values)).mean() + cfg.vf_coef * loss_v - cfg.ent_coef * ent),
+            (tr("the entropy bonus with the wrong sign (+ ent_coef * H; the bonus is subtracted "
+                "from the loss)", "熵奖励的符号反了（损失里应该减去 ent_coef * H）"),
+             loss_pi + cfg.vf_coef * loss_v + cfg.ent_coef * ent),
+            (tr("the critic's loss not halved (0.5 * mean((V - R)^2))",
+                "评论员的损失没有乘 0.5（应该是 0.5 * mean((V - R)^2)）"),
+             loss_pi + cfg.vf_coef * 2 * loss_v - cfg.ent_coef * ent),
+            (tr("the actor's sign: +mean(log pi * A) (the loss is minus it)",
+                "演员项的符号反了：损失应该是 -mean(log pi * A)"),
+             -loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * ent)]
+
+
+def td_mistakes(reward, not_done, next_q, gamma):
+    return [(tr("no not_done: a future added after a termination", "没有乘 not_done：终止之后还加了未来"),
+             reward + gamma * next_q),
+            (tr("(1 - not_done): not_done is already 1 - terminated",
+                "写成了 (1 - not_done)：not_done 本身就是 1 - terminated"),
+             reward + gamma * (1 - not_done) * next_q),
+            (tr("gamma left out", "漏了 gamma"), reward + not_done * next_q)]
+
+
+def actor_mistakes(actor, critic, obs):
+    q = critic(obs, actor(obs).detach())
+    return [(tr("+Q: the actor must ascend Q, so its loss is -Q", "+Q：演员要提高 Q，所以损失是 -Q"),
+             q.mean()),
+            (tr("a sum over the batch where the mean belongs", "对批量求了和，应该求均值"), -q.sum())]
+
+
+def beta_mistakes(beta, d, cfg):
+    lo, hi = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance
+    return [(tr("the two rules swapped: beta must shrink when d is small, grow when it is large",
+                "两条规则反了：d 小时 beta 应该变小，d 大时变大"),
+             beta * cfg.beta_factor if d < lo else beta / cfg.beta_factor if d > hi else beta),
+            (tr("the tolerance (1.5) used as the factor (2)", "把容差（1.5）当成了倍数（2）"),
+             beta / cfg.kl_tolerance if d < lo else beta * cfg.kl_tolerance if d > hi else beta),
+            (tr("<= or >= at the band's edges, where the paper's rules are strict (< and >)",
+                "区间边界用了 <= 或 >=，论文的规则是严格的 < 和 >"),
+             beta / cfg.beta_factor if d <= lo else beta * cfg.beta_factor if d >= hi else beta)]
+
+
+def named_mistake(ex, args, got):
+    """The name of a known mistake whose value `got` (the function's first output) is, or ''."""
+    if ex.mistakes is None:
+        return ""
+    got = got[0] if isinstance(got, tuple) else got
+    for label, value in ex.mistakes(*args):
+        try:
+            same = (torch.is_tensor(got) and torch.is_tensor(value) and got.shape == value.shape
+                    and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5))
+            same = same or (not torch.is_tensor(value) and isinstance(got, (int, float))
+                            and abs(got - value) < 1e-9)
+        except (TypeError, RuntimeError):
+            same = False
+        if same:
+            return tr("\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：") + label
+    return ""
 
 
 # ==== Stage (b): the real loop, beside the script's own function ============================
@@ -264,25 +571,39 @@ def loop_logs(ex, fn, tmp):
     script's own, fn=None)."""
     script = importlib.import_module(ex.script)
     swaps = [] if fn is None else [(ex.owner(), ex.function, fn)]
-    losses = []  # DDPG: every update's two losses, to 6 significant digits
-    if ex.script.startswith("ddpg"):
-        update = script.ddpg_update
+    losses = []  # DDPG, TD3: every update's two losses, to 6 significant digits
+    update_fn = dict(ddpg_walker="ddpg_update", td3_walker="update_critics").get(ex.script)
+    if update_fn:
+        # the learner's function where it is the update itself, else the script's own
+        update = fn if fn is not None and ex.function == update_fn else getattr(script, update_fn)
 
         def recorded(*args):
             out = update(*args)
-            losses.append(dict(critic_loss=f"{out[0].item():.6g}", actor_loss=f"{out[1].item():.6g}"))
+            first, second = (out if isinstance(out, tuple) else (out, torch.tensor(0.0)))
+            losses.append(dict(critic_loss=f"{first.item():.6g}", actor_loss=f"{second.item():.6g}"))
             return out
-        swaps.append((script, "ddpg_update", recorded))
+        swaps = [s for s in swaps if s[1] != update_fn] + [(script, update_fn, recorded)]
     with swapped(swaps), contextlib.redirect_stdout(io.StringIO()):
         result = script.train(script.Config(**ex.loop, run_dir=str(tmp)))
     run = Path(result["run_dir"])
-    if losses:
+    if update_fn:
+        if ex.script == "td3_walker":  # update_critics gives the critics' loss only
+            losses = [dict(critic_loss=row["critic_loss"]) for row in losses]
         return [dict(row, step=str(ex.loop["start_steps"] + i + 1)) for i, row in enumerate(losses)] + [
             dict(r, where="evaluation") for r in csv.DictReader(open(run / "evaluations.csv"))]
     return list(csv.DictReader(open(run / "progress.csv")))
 
 
 REFERENCE = {}  # the script's own logs per loop setting, run once per process
+
+
+def never_called(ex, stage):
+    return Failed(tr(
+        f"{ex.script}.train() never called {ex.function} in {stage}: the script no longer uses "
+        f"the function this\n  exercise checks (its settings or its code changed), so the stage "
+        f"would pass whatever you wrote.\n  This is the checker's fault, not yours: please report it.",
+        f"{ex.script}.train() 在{stage}里一次也没有调用 {ex.function}：脚本已经不用这个练习检查的函数了"
+        f"（它的设置或代码变了），\n  所以这一关无论你写什么都会通过。这是检查程序的问题，不是你的：请报告它。"))
 
 
 def real_loop(ex, fn):
@@ -297,43 +618,73 @@ def real_loop(ex, fn):
             calls[0] += 1
             return fn(*args, **kw)
 
+        counted.__name__ = ex.function
         try:
             yours = loop_logs(ex, counted, Path(tmp) / "yours")
         except Exception as e:  # noqa: BLE001  the learner's error, named in one line
-            raise Failed(f"in {ex.script}.train(), at call {calls[0]} of your function: "
-                         f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}")
-    unit = "step" if ex.script.startswith("ddpg") else "update"
+            raise Failed(tr(f"in {ex.script}.train(), at call {calls[0]} of your function: ",
+                            f"在 {ex.script}.train() 里，你的函数第 {calls[0]} 次被调用时出错：")
+                         + f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}")
+    if calls[0] == 0:
+        raise never_called(ex, tr("stage (b)", "第 (b) 关"))
+    unit = tr("step", "第 {} 步") if ex.script in ("ddpg_walker", "td3_walker") else tr(
+        "update", "第 {} 次更新")
     for i, (a, b) in enumerate(zip(reference, yours)):
         for key in a:
             if key in ("sps",) or a[key] == b.get(key):
                 continue
-            where = (f"evaluation at step {a['global_step']}" if a.get("where")
-                     else f"{unit} {a['step'] if 'step' in a else i + 1}")
-            raise Failed(f"{ex.script}.train() with your function: the logs first differ at "
-                         f"{where}, in {key}: the script's own gives {a[key]}, yours {b.get(key)}"
-                         f"\n  {ex.loop_hint}")
+            n = a["step"] if "step" in a else i + 1
+            where = (tr(f"evaluation at step {a['global_step']}", f"第 {a['global_step']} 步的评估")
+                     if a.get("where") else (f"{unit} {n}" if LANG == "en" else unit.format(n)))
+            raise Failed(tr(f"{ex.script}.train() with your function: the logs first differ at "
+                            f"{where}, in {key}: the script's own gives {a[key]}, yours {b.get(key)}",
+                            f"换上你的函数后，{ex.script}.train() 的日志第一次不同是在{where}，"
+                            f"{key}：脚本自己的是 {a[key]}，你的是 {b.get(key)}")
+                         + f"\n  {ex.loop_hint()}")
     if len(reference) != len(yours):
-        raise Failed(f"{ex.script}.train() with your function logged {len(yours)} rows, the "
-                     f"script's own {len(reference)}")
+        raise Failed(tr(f"{ex.script}.train() with your function logged {len(yours)} rows, the "
+                        f"script's own {len(reference)}",
+                        f"换上你的函数后，{ex.script}.train() 记了 {len(yours)} 行日志，"
+                        f"脚本自己的是 {len(reference)} 行"))
 
 
 # ==== Stage (c): learning ===================================================================
 
+HOLD = 2  # DDPG, TD3: the last HOLD evaluations must be at the maximum, not only one of them
+
 
 def learns(ex, fn):
     script = importlib.import_module(ex.script)
-    with tempfile.TemporaryDirectory() as tmp, swapped([(ex.owner(), ex.function, fn)]):
+    calls = [0]
+
+    def counted(*args, **kw):
+        calls[0] += 1
+        return fn(*args, **kw)
+
+    with tempfile.TemporaryDirectory() as tmp, swapped([(ex.owner(), ex.function, counted)]):
         with contextlib.redirect_stdout(io.StringIO()):
             result = script.train(script.Config(**ex.learn, run_dir=tmp))
-    if ex.script.startswith("ddpg"):
-        best = max(m for _, m, _ in result["evaluations"])
-        if best < 1000:
-            raise Failed(f"InvertedPendulum-v5 in 20,000 steps: best evaluation {best:.0f}, "
-                         "not 1000 (the script's own reaches 1000)")
+    if calls[0] == 0:
+        raise never_called(ex, tr("stage (c)", "第 (c) 关"))
+    if "evaluations" in result:  # DDPG, TD3 on InvertedPendulum-v5: the pole held to the end
+        means = [m for _, m, _ in result["evaluations"]]
+        last = means[-HOLD:]
+        if min(last) < 1000:
+            steps = f"{result['global_step']:,}"
+            raise Failed(tr(
+                f"InvertedPendulum-v5 in {steps} steps: the last {HOLD} evaluations are "
+                f"{', '.join(f'{m:.0f}' for m in last)}, not all 1000 (the maximum, held by the "
+                f"script's own to the end)\n  every evaluation: "
+                f"{', '.join(f'{m:.0f}' for m in means)}",
+                f"InvertedPendulum-v5 练 {steps} 步：最后 {HOLD} 次评估是 "
+                f"{', '.join(f'{m:.0f}' for m in last)}，不全是 1000（满分；脚本自己的一直保持到最后）"
+                f"\n  每次评估：{', '.join(f'{m:.0f}' for m in means)}"))
     elif not result["solved"]:
         recent = sum(result["episode_returns"][-20:]) / max(len(result["episode_returns"][-20:]), 1)
-        raise Failed(f"CartPole-v1 not solved in {result['global_step']} steps (the script's "
-                     f"own solves it): the last 20 episodes' mean return is {recent:.1f}")
+        raise Failed(tr(f"CartPole-v1 not solved in {result['global_step']} steps (the script's "
+                        f"own solves it): the last 20 episodes' mean return is {recent:.1f}",
+                        f"CartPole-v1 练了 {result['global_step']} 步还没解决（脚本自己的能解决）："
+                        f"最后 20 个回合的平均回报是 {recent:.1f}"))
     return result
 
 
@@ -348,45 +699,65 @@ DDPG_LEARN = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=20_000, print_every=1
                   gifs=False, curves=False, cuda=False)
 
 
-GRADIENT = ("Your values passed the worked cases, and training still went another way: look at "
-            "what your\n  loss does to the gradient (a .detach(), or a tensor that does not "
-            "come from the network\n  being trained, cuts it).")
+def ON_REAL_DATA():
+    return tr("Your function passed the worked cases, and on the script's real data it gives "
+              "another number:\n  compare its inputs there (their shapes, several envs, the "
+              "flags) with the cases'.",
+              "你的函数通过了手算的例子，但在脚本的真实数据上得出的数不同：\n  比较那里的输入"
+              "（形状、多个环境、各个标志）和例子里的有什么不同。")
 
 
-def exercise(name, script, function, owner, cases, loop, learn, hint, outputs=("output",)):
+def OFF_POLICY():
+    return tr("Each step's actor update changes the next step's critic loss (through the "
+              "targets): the first\n  quantity that differs may come from another function "
+              "than the one it is named after.",
+              "每一步演员的更新都会（通过目标网络）改变下一步评论员的损失：第一个不同的量，"
+              "\n  可能来自别的函数，而不是名字上对应的那个。")
+
+
+def exercise(name, script, function, owner, cases, loop, learn, hint, outputs=("output",),
+             mistakes=None):
     return SimpleNamespace(name=name, script=script, function=function, cases=cases,
                            owner=lambda: importlib.import_module(owner), loop=loop,
-                           learn=learn, loop_hint=hint, outputs=outputs)
+                           learn=learn, loop_hint=hint, outputs=outputs, mistakes=mistakes)
 
 
 EXERCISES = {ex.name: ex for ex in (
     exercise("discounted_returns", "actor_critic_cartpole", "discounted_returns", "common",
              returns_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN,
-             "A2C's critic targets R_t come from your returns: the first update that differs is"
-             "\n  where your returns differ on real rollouts (several envs, autoreset steps).",
-             outputs=("returns",)),
+             lambda: tr("A2C's critic targets R_t come from your returns: the first update "
+                        "that differs is\n  where your returns differ on real rollouts "
+                        "(several envs, autoreset steps).",
+                        "A2C 评论员的目标 R_t 来自你的回报：第一次不同的更新，就是你的回报在真实"
+                        "\n  rollout 上（多个环境、自动重置步）开始不同的地方。"),
+             outputs=("returns",), mistakes=returns_mistakes),
     exercise("gae", "ppo_cartpole", "gae", "common", gae_cases,
              dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
-             "PPO's advantages and value targets come from your GAE: the first update that"
-             "\n  differs is where your GAE differs on real rollouts.", outputs=("advantages",)),
+             lambda: tr("PPO's advantages and value targets come from your GAE: the first "
+                        "update that\n  differs is where your GAE differs on real rollouts.",
+                        "PPO 的优势和价值目标来自你的 GAE：第一次不同的更新，就是你的 GAE 在"
+                        "\n  真实 rollout 上开始不同的地方。"), outputs=("advantages",), mistakes=gae_mistakes),
     exercise("clipped_surrogate", "ppo_cartpole", "compute_loss_pi", "ppo_cartpole",
-             clip_cases, dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN, GRADIENT,
-             outputs=("loss_pi", "entropy", "info")),
+             clip_cases, dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
+             ON_REAL_DATA, outputs=("loss_pi", "entropy", "info"), mistakes=clip_mistakes),
     exercise("kl_penalty", "ppo_kl_cartpole", "compute_loss_pi", "ppo_kl_cartpole", kl_cases,
-             dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN, GRADIENT,
-             outputs=("loss_pi", "entropy", "info")),
+             dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN, ON_REAL_DATA,
+             outputs=("loss_pi", "entropy", "info"), mistakes=kl_mistakes),
     exercise("adapt_beta", "ppo_kl_cartpole", "adapt_beta", "ppo_kl_cartpole", beta_cases,
              dict(CARTPOLE_LOOP, total_timesteps=2560), CARTPOLE_LEARN,
-             "Each update's beta comes from your rule.", outputs=("beta",)),
+             lambda: tr("Each update's beta comes from your rule.", "每次更新的 beta 都来自你的规则。"),
+             outputs=("beta",), mistakes=beta_mistakes),
     exercise("a2c_loss", "actor_critic_cartpole", "a2c_loss", "actor_critic_cartpole",
-             a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN, GRADIENT,
-             outputs=("loss", "stats")),
+             a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN, ON_REAL_DATA,
+             outputs=("loss", "stats"), mistakes=a2c_mistakes),
     exercise("td_target", "ddpg_walker", "td_target", "ddpg_walker", td_cases, DDPG_LOOP,
-             DDPG_LEARN, "The critic is trained toward your targets.", outputs=("y",)),
+             DDPG_LEARN, lambda: tr("The critic is trained toward your targets. ",
+                                    "评论员朝你的目标训练。") + OFF_POLICY(), outputs=("y",), mistakes=td_mistakes),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
-             DDPG_LOOP, DDPG_LEARN, GRADIENT, outputs=("actor_loss",)),
-    exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", soft_cases, DDPG_LOOP,
-             DDPG_LEARN, "The targets move by your soft update."),
+             DDPG_LOOP, DDPG_LEARN, OFF_POLICY, outputs=("actor_loss",), mistakes=actor_mistakes),
+    exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", lambda: [], DDPG_LOOP,
+             DDPG_LEARN, lambda: tr("The targets move by your soft update. ",
+                                    "目标网络按你的软更新移动。") + OFF_POLICY()),
 )}
 
 
@@ -406,45 +777,66 @@ def load(name, path=None):
     return getattr(module, ex.function)
 
 
+def stage_names():
+    return (tr("(a) worked cases", "(a) 手算的例子"), tr("(b) the real loop", "(b) 真实的训练循环"),
+            tr("(c) learning", "(c) 学会任务"))
+
+
 def check(name, fn=None, learning=True, say=print):
     """Run the stages on `fn` (default: exercises/<name>.py's); True if all pass."""
     ex, fn = EXERCISES[name], fn or load(name)
-    stages = [("(a) worked cases", worked_cases), ("(b) the real loop", real_loop)]
-    stages += [("(c) learning", learns)] if learning else []
+    names = stage_names()
+    stages = [(names[0], worked_cases), (names[1], real_loop)]
+    stages += [(names[2], learns)] if learning else []
+    fail = tr("FAIL", "未通过")
     for stage, run in stages:
         start = time.time()
         try:
             run(ex, fn)
         except NotImplementedError:
-            say(f"{name}: {stage}: FAIL: {NOT_WRITTEN} (fill in the blank in "
-                f"exercises/{name}.py)")
+            say(f"{name}: {stage}: {fail}: " + tr(
+                f"{NOT_WRITTEN} (fill in the blank in exercises/{name}.py)",
+                f"还没写（在 exercises/{name}.py 里填空）"))
             return False
         except Failed as e:
-            say(f"{name}: {stage}: FAIL: {e}")
+            say(f"{name}: {stage}: {fail}: {e}")
             return False
         except Exception as e:  # noqa: BLE001  the learner's code raised: name it
-            say(f"{name}: {stage}: FAIL: your function raised {type(e).__name__}: {e}")
+            say(f"{name}: {stage}: {fail}: " + tr("your function raised ", "你的函数出错：")
+                + f"{type(e).__name__}: {e}")
             return False
-        say(f"{name}: {stage}: pass ({time.time() - start:.1f} s)")
+        say(f"{name}: {stage}: " + tr("pass", "通过") + f" ({time.time() - start:.1f} s)")
     return True
 
 
 def main(argv=None):
+    global LANG
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("name", nargs="?", choices=sorted(EXERCISES), help="the exercise")
     parser.add_argument("--no-learning", action="store_true", help="stop after stage (b)")
+    parser.add_argument("--lang", choices=("zh", "en"), default=None,
+                        help="the messages' language (default: from the locale, e.g. LANG=zh_CN.UTF-8 "
+                             "gives zh; else en)")
     args = parser.parse_args(argv)
+    LANG = args.lang or locale_lang()
     if args.name:
         sys.exit(0 if check(args.name, learning=not args.no_learning) else 1)
+    all_passed = True
+    fail = tr("FAIL", "未通过")
     for name in EXERCISES:  # no name: (a) and (b) of every exercise, one line each
         lines = []
         passed = check(name, learning=False, say=lines.append)
-        stage, _, why = lines[-1].removeprefix(f"{name}: ").partition(": FAIL: ")
-        verdict = "(a) and (b) pass" if passed else f"FAIL at {stage}: {why.splitlines()[0]}"
+        all_passed &= passed
+        stage, _, why = lines[-1].removeprefix(f"{name}: ").partition(f": {fail}: ")
+        verdict = (tr("(a) and (b) pass", "(a) 和 (b) 通过") if passed else
+                   f"{fail} " + tr("at ", "于 ") + f"{stage}: {why.splitlines()[0]}")
         if name in BUGS and not passed:  # where it fails would give the bug away
-            verdict = "not fixed yet"
+            verdict = tr("not fixed yet", "还没改好")
         print(f"{name:20} {verdict}", flush=True)
-    print("(stage (c), learning, runs one exercise at a time: python exercises/check.py NAME)")
+    print(tr("(stage (c), learning, runs one exercise at a time: python exercises/check.py NAME)",
+             "（第 (c) 关要训练，一次只查一个练习：python exercises/check.py 练习名）"))
+    # exit status 0 only when every exercise passed (a) and (b): scripts and tests can rely on it
+    sys.exit(0 if all_passed else 1)
 
 
 if __name__ == "__main__":
