@@ -30,13 +30,12 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
-from torch.distributions import Categorical, kl_divergence  # noqa: E402  (the mistakes' values)
-
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "experiments"))
 
 import torch  # noqa: E402
+from torch.distributions import Categorical, kl_divergence  # noqa: E402  (the mistakes' values)
 
 import common  # noqa: E402
 from lab import DDPG_IN_MINUTES, swapped  # noqa: E402
@@ -217,6 +216,108 @@ def actor_cases():
              (actor, critic, t([1.0], [2.0])), scalar(-5.0))]
 
 
+def group_cases():
+    # Two groups of G = 4: (1, 0, 0, 0): mean 0.25, std 0.5 (n - 1); (1, 1, 0, 1): mean 0.75,
+    # std 0.5. A flat group (1, 1, 1, 1): 0, not nan.
+    r = t(1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0)
+    s = 0.5 + 1e-4
+    return [
+        (tr("G = 4, groups (1, 0, 0, 0) and (1, 1, 0, 1): means 0.25, 0.75, stds 0.5 (n - 1)",
+            "G = 4，两组 (1, 0, 0, 0) 和 (1, 1, 0, 1)：均值 0.25、0.75，标准差 0.5（n - 1）"),
+         (r, 4, True), t(0.75 / s, -0.25 / s, -0.25 / s, -0.25 / s,
+                         0.25 / s, 0.25 / s, -0.75 / s, 0.25 / s)),
+        (tr("scale = False (Dr. GRPO): r - mean of the group only",
+            "scale = False（Dr. GRPO）：只减去组内均值"),
+         (r, 4, False), t(0.75, -0.25, -0.25, -0.25, 0.25, 0.25, -0.75, 0.25)),
+        (tr("a flat group (1, 1, 1, 1) beside (1, 0, 0, 0): 0 for the flat one, not nan",
+            "全相同的一组 (1, 1, 1, 1) 和 (1, 0, 0, 0)：全相同的那组是 0，不是 nan"),
+         (t(1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0), 4, True),
+         t(0.0, 0.0, 0.0, 0.0, 0.75 / s, -0.25 / s, -0.25 / s, -0.25 / s)),
+    ]
+
+
+def group_mistakes(rewards, G, scale):
+    def adv(view=lambda r: r.view(-1, G), unbiased=True, eps=1e-4, whole=False):
+        r = rewards.view(1, -1) if whole else view(rewards)
+        a = r - r.mean(1, keepdim=True)
+        if scale:
+            a = a / (r.std(1, keepdim=True, unbiased=unbiased) + eps)
+        return a.reshape(-1) if not whole else a.reshape(-1)
+    return [(tr("the std without Bessel's correction (n, not n - 1; torch's .std() is n - 1)",
+                "标准差没有用贝塞尔校正（除以 n，不是 n - 1；torch 的 .std() 除以 n - 1）"),
+             adv(unbiased=False)),
+            (tr("the mean and std over the whole batch, not each prompt's group",
+                "均值和标准差是对整个批量算的，不是对每道题的那一组"), adv(whole=True)),
+            (tr("the groups read down the columns (view(G, -1)): a group is G consecutive rewards",
+                "分组分错了（view(G, -1)）：一组是连续的 G 个奖励"),
+             (lambda r: (r - r.mean(0, keepdim=True)) / (
+                 r.std(0, keepdim=True) + 1e-4 if scale else 1))(rewards.view(G, -1)).reshape(-1)),
+            (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"), adv(eps=0.0))]
+
+
+def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no_mask=False,
+                 token_mean=False, kl_sign=1.0, no_clip=False):
+    """The loss element by element, in plain Python (and the named mistakes' versions)."""
+    eps, per_completion, total, tokens = cfg.clip_coef, [], 0.0, 0.0
+    for i in range(len(adv)):
+        row = 0.0
+        for j in range(logp.shape[1]):
+            r = math.exp(float(logp[i, j] - logp_old[i, j]))
+            a = float(adv[i])
+            s = r * a if no_clip else min(r * a, min(max(r, 1 - eps), 1 + eps) * a)
+            x = float(logp[i, j] - logp_ref[i, j]) if kl_reversed else float(
+                logp_ref[i, j] - logp[i, j])
+            d = math.exp(x) - x - 1
+            m = 1.0 if no_mask else float(mask[i, j])
+            row += (s - kl_sign * cfg.beta * d) * m
+            tokens += float(mask[i, j])
+        total += row
+        n = float(mask[i].sum()) if cfg.length_norm else logp.shape[1]
+        per_completion.append(row / n)
+    return scalar(-total / tokens if token_mean else -sum(per_completion) / len(adv))
+
+
+def grpo_cases():
+    # Two completions of 3 tokens, the first with 2 of its own (its third is padding). Ratios
+    # 1.5, 0.9, 1.1 / 0.7, 1.05, 1.3 against A = 1.5, -0.5; pi_ref / pi of 2, 0.5, 1, ...
+    logp_old = torch.log(t([0.4, 0.5, 0.6], [0.5, 0.4, 0.3]))
+    logp = (torch.log(t([0.6, 0.45, 0.66], [0.35, 0.42, 0.39]))).requires_grad_()
+    logp_ref = torch.log(t([0.3, 0.9, 0.66], [0.7, 0.21, 0.5]))
+    adv, mask = t(1.5, -0.5), t([1.0, 1.0, 0.0], [1.0, 1.0, 1.0])
+    cases = []
+    for norm in (True, False):
+        cfg = SimpleNamespace(clip_coef=0.2, beta=0.1, length_norm=norm)
+        args = (logp, logp_old, logp_ref, adv, mask, cfg)
+        cases.append((tr(f"2 completions of 3 tokens, the first's third masked; eps = 0.2, "
+                         f"beta = 0.1, length_norm = {norm}",
+                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.2，beta = 0.1，"
+                         f"length_norm = {norm}"), args,
+                      (grpo_by_hand(*(a.detach() if torch.is_tensor(a) else a for a in args)),
+                       None)))
+    return cases
+
+
+def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
+    args = [a.detach() if torch.is_tensor(a) else a for a in (logp, logp_old, logp_ref, adv, mask)]
+    return [(tr("k3 the other way round: pi / pi_ref where k3 of KL(pi || pi_ref) has pi_ref / pi",
+                "k3 的方向反了：用了 pi / pi_ref，KL(pi || pi_ref) 的 k3 用 pi_ref / pi"),
+             grpo_by_hand(*args, cfg, kl_reversed=True)),
+            (tr("the mask not applied: the padding after the first \".\" counted",
+                "没有乘掩码：第一个 \".\" 之后的填充也算进去了"),
+             grpo_by_hand(*args, cfg, no_mask=True)),
+            (tr("one mean over all the batch's tokens, where each completion is averaged over its "
+                "own tokens first", "对整个批量的所有 token 求了一个均值，应该先在每个回答自己的 token "
+                "上平均"), grpo_by_hand(*args, cfg, token_mean=True)),
+            (tr("the KL penalty's sign: + beta * D where the objective subtracts it",
+                "KL 惩罚的符号反了：目标函数里应该减去 beta * D"),
+             grpo_by_hand(*args, cfg, kl_sign=-1.0)),
+            (tr("no clip: r * A alone, without min(.., clip(r) A)",
+                "没有裁剪：只用了 r * A，没有 min(.., clip(r) A)"),
+             grpo_by_hand(*args, cfg, no_clip=True)),
+            (tr("the sign: the objective returned, where the loss is its negative",
+                "符号反了：返回的是目标函数，损失应该取负"), -grpo_by_hand(*args, cfg))]
+
+
 def check_soft_update(fn):
     target, source = torch.nn.Linear(2, 1), torch.nn.Linear(2, 1)
     with torch.no_grad():
@@ -241,6 +342,88 @@ def check_soft_update(fn):
     if [float(x) for p in source.parameters() for x in p.detach().flatten()] != [1.0] * 3:
         raise Failed(tr("soft_update changed the source network; only the target moves",
                         "soft_update 改了原网络；应该只动目标网络"))
+
+
+def td3_case(sigma, c, low, high):
+    """nets whose targets are simple functions of s' (act_dim 1): mu'(s') = s'_2,
+    Q1'(s', a) = s'_0 + (a - s'_2)^2, Q2'(s', a) = s'_1 + 2 (a - s'_2)^2; the critics give 0
+    for every batch, so the gradient of the critics' loss gives y back: dL/dQ = 2 (Q - y) / B."""
+    class Zero(torch.nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.q = torch.nn.Parameter(torch.zeros(3))
+
+        def forward(self, obs, action):
+            return self.q
+
+    class NoStep:
+        def zero_grad(self):
+            pass
+
+        def step(self):
+            pass
+
+    nets = dict(actor_target=lambda s: s[:, 2:3],
+                critic_target=lambda s, a: s[:, 0] + ((a - s[:, 2:3]) ** 2).sum(-1),
+                critic2_target=lambda s, a: s[:, 1] + 2 * ((a - s[:, 2:3]) ** 2).sum(-1),
+                critic=Zero(), critic2=Zero(), critic_opt=NoStep())
+    next_obs = t([3.0, 4.0, 0.0], [5.0, 2.0, 0.0], [1.0, 1.0, 0.0])
+    batch = (torch.zeros(3, 3), torch.zeros(3, 1), t(1.0, 1.0, 1.0), next_obs, t(1.0, 1.0, 0.0))
+    cfg = SimpleNamespace(gamma=0.5, target_noise=sigma, noise_clip=c, tau=0.005, policy_delay=2)
+    return nets, batch, t(2.0), t(low), t(high), cfg
+
+
+def td3_cases():
+    # min(Q1', Q2') at a~: rows (3 + d, 4 + 2d), (5 + d, 2 + 2d), (1 + d, 1 + 2d), d = (a~ - mu')^2
+    return [
+        (tr("sigma = 0 (no smoothing): Q1' = (3, 5, 1), Q2' = (4, 2, 1), the third terminated: "
+            "y = 1 + 0.5 * min", "sigma = 0（不平滑）：Q1' = (3, 5, 1)，Q2' = (4, 2, 1)，第三个终止："
+            "y = 1 + 0.5 * min"), (0.0, 0.5, [-3.0], [3.0]), t(2.5, 2.0, 1.0),
+         [(tr("max where clipped double Q takes the smaller", "取了较大的，裁剪双 Q 要取较小的"),
+           t(3.0, 3.5, 1.0)),
+          (tr("Q1' alone (the second target critic unused)", "只用了 Q1'（没用第二个目标评论员）"),
+           t(2.5, 3.5, 1.0)),
+          (tr("the mean of Q1' and Q2' where their min belongs", "取了 Q1' 和 Q2' 的平均，应该取较小的"),
+           t(2.75, 2.75, 1.0)),
+          (tr("no not_done: a future after a termination", "没有乘 not_done：终止之后还加了未来"),
+           t(2.5, 2.0, 1.5))]),
+        (tr("sigma = 10000, c = 0.5, half_width = 2: eps always clipped, |a~ - mu'(s')| = 1",
+            "sigma = 10000，c = 0.5，half_width = 2：噪声总被裁剪，|a~ - mu'(s')| = 1"),
+         (1e4, 0.5, [-3.0], [3.0]), t(3.0, 3.0, 1.0),
+         [(tr("eps not scaled by half_width (or clipped after the scaling): |a~ - mu'| = 0.5",
+              "噪声没有乘 half_width（或者乘了之后才裁剪）：|a~ - mu'| = 0.5"), t(2.625, 2.25, 1.0)),
+          (tr("the noise not clipped to [-c, c]: with sigma = 10000, a~ lands on the action "
+              "box's edge, |a~ - mu'| = 3", "噪声没有裁剪到 [-c, c]：sigma = 10000 时，a~ 落在动作范围的"
+              "边上，|a~ - mu'| = 3"), t(7.0, 8.0, 1.0))]),
+        (tr("the same noise, the action box [-0.5, 0.5]: a~ = +-1 clipped into the box, to +-0.5",
+            "同样的噪声，动作范围 [-0.5, 0.5]：a~ = +-1 要限制到范围内，成为 +-0.5"),
+         (1e4, 0.5, [-0.5], [0.5]), t(2.625, 2.25, 1.0),
+         [(tr("a~ not clipped into the action box [low, high]", "a~ 没有限制在动作范围 [low, high] 内"),
+           t(3.0, 3.0, 1.0))]),
+    ]
+
+
+def check_td3_target(fn):
+    for what, settings, expected, mistakes in td3_cases():
+        nets, batch, half_width, low, high, cfg = td3_case(*settings)
+        fn(nets, batch, half_width, low, high, cfg)
+        y1, y2 = (None if nets[k].q.grad is None else -nets[k].q.grad * 3 / 2
+                  for k in ("critic", "critic2"))
+        try:
+            if y1 is None or y2 is None:
+                raise Failed(tr("no gradient reached the critics: the lines after the blank "
+                                "must stay as they are", "梯度没有传到评论员：空白后面的代码要保持原样"))
+            compare("y", y1, expected)
+            compare("y (critic2)", y2, expected)
+        except Failed as e:
+            named = [label for label, value in mistakes
+                     if torch.allclose(y1, value, atol=1e-4)] if y1 is not None else []
+            if y1 is not None and (y1 - expected).abs().max() > 100:  # sigma = 10000 here
+                named = [tr("the noise not clipped to [-c, c] (sigma is 10000 in this case)",
+                            "噪声没有裁剪到 [-c, c]（这个例子里 sigma 是 10000）")]
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
+                "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
+                + named[0] if named else "")) from None
 
 
 def compare(name, got, expected):
@@ -304,7 +487,7 @@ def show(ex, args):
                      if not callable(a) and not isinstance(a, SimpleNamespace))
 
 
-def gradients(f, args):
+def gradients(f, args, parameters):
     """{network output's name: its gradient} after backward() of f(*args)'s loss (its first
     output), on copies of the case's inputs; None if the loss carries no gradient at all."""
     args = copy.deepcopy(args)
@@ -313,16 +496,19 @@ def gradients(f, args):
     if not (torch.is_tensor(loss) and loss.requires_grad):
         return None
     loss.backward()
-    return {name: torch.zeros_like(p) if p.grad is None else p.grad
-            for a in args if isinstance(a, Fixed) for name, p in zip(a.names, a.outputs)}
+    leaves = [(name, p) for a in args if isinstance(a, Fixed) for name, p in zip(a.names, a.outputs)]
+    leaves += [(name, a) for name, a in zip(parameters, args) if torch.is_tensor(a) and a.requires_grad]
+    return {name: torch.zeros_like(p) if p.grad is None else p.grad for name, p in leaves}
 
 
 def compare_gradients(ex, fn, args):
     """Where values cannot tell, the gradient can: the loss's gradient with respect to each
     network output of the case, yours against the script's own function's."""
-    if not any(isinstance(a, Fixed) for a in args):
+    if not any(isinstance(a, Fixed) or torch.is_tensor(a) and a.requires_grad for a in args):
         return
-    reference, yours = gradients(getattr(ex.owner(), ex.function), args), gradients(fn, args)
+    own = getattr(ex.owner(), ex.function)
+    parameters = list(inspect.signature(own).parameters)
+    reference, yours = gradients(own, args, parameters), gradients(fn, args, parameters)
     if reference is None:
         return
     if yours is None:
@@ -369,6 +555,8 @@ def compare_gradients(ex, fn, args):
 def worked_cases(ex, fn):
     if ex.function == "soft_update":
         return check_soft_update(fn)
+    if ex.function == "update_critics":
+        return check_td3_target(fn)
     for what, args, expected in ex.cases():
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
         got = fn(*args)
@@ -666,7 +854,15 @@ def learns(ex, fn):
             result = script.train(script.Config(**ex.learn, run_dir=tmp))
     if calls[0] == 0:
         raise never_called(ex, tr("stage (c)", "第 (c) 关"))
-    if "evaluations" in result:  # DDPG, TD3 on InvertedPendulum-v5: the pole held to the end
+    if ex.script == "grpo_addition":  # held-out pass@1 after GRPO, from the supervised start
+        (before, _), (after, _) = result["before"], result["after"]
+        if after < GRPO_BAR:
+            raise Failed(tr(
+                f"held-out pass@1 after GRPO is {after:.3f} (from {before:.3f} after supervision), "
+                f"under {GRPO_BAR} (the script's own: 0.94 to 0.96 on seeds 0-4)",
+                f"GRPO 之后留出题的 pass@1 是 {after:.3f}（监督学习之后是 {before:.3f}），低于 "
+                f"{GRPO_BAR}（脚本自己的在种子 0-4 上是 0.94 到 0.96）"))
+    elif "evaluations" in result:  # DDPG, TD3 on InvertedPendulum-v5: the pole held to the end
         means = [m for _, m, _ in result["evaluations"]]
         last = means[-HOLD:]
         if min(last) < 1000:
@@ -697,6 +893,12 @@ DDPG_LOOP = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=600, start_steps=300, 
                  eval_episodes=1, print_every=1, gifs=False, curves=False, cuda=False)
 DDPG_LEARN = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=20_000, print_every=10**6,
                   gifs=False, curves=False, cuda=False)
+TD3_LOOP, TD3_LEARN = DDPG_LOOP, DDPG_LEARN
+# GRPO: a short supervised phase, then a few GRPO steps (the loop); the default run (learning)
+GRPO_LOOP = dict(seed=0, sft_steps=20, grpo_steps=4, prompts=8, eval_every=20, eval_prompts=20,
+                 curves=False, print_every=10**6)
+GRPO_LEARN = dict(seed=0, curves=False, print_every=10**6)
+GRPO_BAR = 0.9  # held-out pass@1 after GRPO: seeds 0-4 gave 0.941 to 0.955, the start 0.70-0.76  # TD3 on the same task, at the same settings
 
 
 def ON_REAL_DATA():
@@ -755,6 +957,19 @@ EXERCISES = {ex.name: ex for ex in (
                                     "评论员朝你的目标训练。") + OFF_POLICY(), outputs=("y",), mistakes=td_mistakes),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
              DDPG_LOOP, DDPG_LEARN, OFF_POLICY, outputs=("actor_loss",), mistakes=actor_mistakes),
+    exercise("td3_target", "td3_walker", "update_critics", "td3_walker", lambda: [], TD3_LOOP,
+             TD3_LEARN, lambda: tr("Both critics are trained toward your target; the noise comes "
+                                   "from torch's generator in\n  the script's order "
+                                   "(torch.randn_like(action), one draw per update). ",
+                                   "两个评论员都朝你的目标训练；噪声来自 torch 的随机数生成器，"
+                                   "顺序和脚本一样\n  （torch.randn_like(action)，每次更新抽一次）。")
+             + OFF_POLICY(), outputs=("critic_loss",)),
+    exercise("group_advantages", "grpo_addition", "group_advantages", "grpo_addition",
+             group_cases, GRPO_LOOP, GRPO_LEARN,
+             lambda: tr("Every update's advantages come from your function.", "每次更新的优势都来自你的函数。"),
+             outputs=("adv",), mistakes=group_mistakes),
+    exercise("grpo_loss", "grpo_addition", "grpo_loss", "grpo_addition", grpo_cases, GRPO_LOOP,
+             GRPO_LEARN, ON_REAL_DATA, outputs=("loss", "info"), mistakes=grpo_mistakes),
     exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", lambda: [], DDPG_LOOP,
              DDPG_LEARN, lambda: tr("The targets move by your soft update. ",
                                     "目标网络按你的软更新移动。") + OFF_POLICY()),

@@ -178,6 +178,95 @@ WRONG = {
         ("""def compute_loss_actor(actor, critic, obs):
                 return -critic(obs, actor(obs)).sum()""", "(a)", "a sum over the batch"),
     ],
+    "td3_target": [
+        ("""def update_critics(nets, batch, half_width, low, high, cfg):
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+                    a2 = (nets['actor_target'](next_obs) + half_width * eps).clamp(low, high)
+                    q1, q2 = nets["critic_target"](next_obs, a2), nets["critic2_target"](next_obs, a2)
+                    y = reward + cfg.gamma * not_done * torch.max(q1, q2)
+                critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                               + F.mse_loss(nets["critic2"](obs, action), y))
+                nets["critic_opt"].zero_grad()
+                critic_loss.backward()
+                nets["critic_opt"].step()
+                return critic_loss.detach()""", "(a)", "max where clipped double Q takes the smaller"),
+        ("""def update_critics(nets, batch, half_width, low, high, cfg):
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    eps = torch.randn_like(action) * cfg.target_noise  # not clipped
+                    a2 = (nets['actor_target'](next_obs) + half_width * eps).clamp(low, high)
+                    q1, q2 = nets["critic_target"](next_obs, a2), nets["critic2_target"](next_obs, a2)
+                    y = reward + cfg.gamma * not_done * torch.min(q1, q2)
+                critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                               + F.mse_loss(nets["critic2"](obs, action), y))
+                nets["critic_opt"].zero_grad()
+                critic_loss.backward()
+                nets["critic_opt"].step()
+                return critic_loss.detach()""", "(a)", "the noise not clipped to [-c, c]"),
+        ("""def update_critics(nets, batch, half_width, low, high, cfg):
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+                    a2 = nets['actor_target'](next_obs) + half_width * eps  # not in the box
+                    q1, q2 = nets["critic_target"](next_obs, a2), nets["critic2_target"](next_obs, a2)
+                    y = reward + cfg.gamma * not_done * torch.min(q1, q2)
+                critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                               + F.mse_loss(nets["critic2"](obs, action), y))
+                nets["critic_opt"].zero_grad()
+                critic_loss.backward()
+                nets["critic_opt"].step()
+                return critic_loss.detach()""", "(a)", "a~ not clipped into the action box"),
+    ],
+    "group_advantages": [
+        ("""def group_advantages(rewards, G, scale):
+                r = rewards.view(-1, G)  # the std without Bessel's correction
+                adv = r - r.mean(1, keepdim=True)
+                return (adv / (r.std(1, keepdim=True, unbiased=False) + 1e-4) if scale else adv).reshape(-1)""",
+         "(a)", "without Bessel's correction"),
+        ("""def group_advantages(rewards, G, scale):
+                adv = rewards - rewards.mean()  # the whole batch as one group
+                return adv / (rewards.std() + 1e-4) if scale else adv""", "(a)",
+         "over the whole batch"),
+        ("""def group_advantages(rewards, G, scale):
+                r = rewards.view(G, -1)  # groups down the columns
+                adv = r - r.mean(0, keepdim=True)
+                return (adv / (r.std(0, keepdim=True) + 1e-4) if scale else adv).reshape(-1)""",
+         "(a)", "the groups read down the columns"),
+    ],
+    "grpo_loss": [
+        ("""def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
+                ratio = torch.exp(logp - logp_old)
+                s = torch.min(ratio * adv[:, None],
+                              ratio.clamp(1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
+                x = logp - logp_ref  # pi / pi_ref
+                kl = torch.exp(x) - x - 1
+                per_token = (s - cfg.beta * kl) * mask
+                length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
+                loss = -(per_token.sum(1) / length).mean()
+                return loss, dict(kl=0.0, clipfrac=0.0, ratio=ratio.detach())""", "(a)", "k3 the other way round"),
+        ("""def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
+                ratio = torch.exp(logp - logp_old)
+                s = torch.min(ratio * adv[:, None],
+                              ratio.clamp(1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
+                x = logp_ref - logp
+                kl = torch.exp(x) - x - 1
+                per_token = (s - cfg.beta * kl)  # no mask
+                length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
+                loss = -(per_token.sum(1) / length).mean()
+                return loss, dict(kl=0.0, clipfrac=0.0, ratio=ratio.detach())""", "(a)", "the mask not applied"),
+        ("""def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
+                ratio = torch.exp(logp - logp_old)
+                s = torch.min(ratio * adv[:, None],
+                              ratio.clamp(1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
+                x = logp_ref - logp
+                kl = torch.exp(x) - x - 1
+                per_token = (s - cfg.beta * kl) * mask
+                length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
+                loss = -per_token.sum() / mask.sum()  # one mean over tokens
+                return loss, dict(kl=0.0, clipfrac=0.0, ratio=ratio.detach())""", "(a)", "one mean over all the batch's tokens"),
+    ],
     "soft_update": [
         ("""def soft_update(target, source, tau):
                 with torch.no_grad():
@@ -305,7 +394,8 @@ def test_a_loop_that_no_longer_calls_the_function_fails_loudly():
     """If the script's settings or code stop calling the exercise's function (A2C with GAE
     instead of the n-step returns), stage (b) says so instead of passing any answer."""
     ex = check.EXERCISES["discounted_returns"]
-    moved = check.SimpleNamespace(**{**vars(ex), "loop": dict(ex.loop, lam=0.95)})
+    loop = dict(ex.loop, lam=0.95, total_timesteps=512)  # one update (8 envs x 64 steps)
+    moved = check.SimpleNamespace(**{**vars(ex), "loop": loop})
     with pytest.raises(check.Failed, match="never called discounted_returns"):
         check.real_loop(moved, lambda *args: None)
 
