@@ -35,6 +35,7 @@ sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "experiments"))
 
 import torch  # noqa: E402
+import torch.nn.functional as F  # noqa: E402
 from torch.distributions import Categorical, kl_divergence  # noqa: E402  (the mistakes' values)
 
 import common  # noqa: E402
@@ -318,6 +319,184 @@ def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
                 "符号反了：返回的是目标函数，损失应该取负"), -grpo_by_hand(*args, cfg))]
 
 
+class ValueOfFirst(torch.nn.Module):
+    """A model whose V(s) is the obs's first number (a Linear layer with weights (1, 0) and
+    a parameter, so a value computed outside torch.no_grad() carries a gradient); logits 0."""
+
+    def __init__(self):
+        super().__init__()
+        self.v = torch.nn.Linear(2, 1)
+        with torch.no_grad():
+            self.v.weight.copy_(t([1.0, 0.0]))
+            self.v.bias.zero_()
+
+    def forward(self, obs):
+        return torch.zeros(*obs.shape[:-1], 2), self.v(obs).squeeze(-1)
+
+
+def a2c_targets_case(lam):
+    obs = torch.stack([t([1.0, 0.0], [2.0, 0.0]), t([3.0, 0.0], [4.0, 0.0]),
+                       t([5.0, 0.0], [6.0, 0.0])])  # V(s_t) = (1, 2), (3, 4), (5, 6)
+    rollout = dict(obs=obs, rewards=torch.ones(3, 2), terminated=flags(
+        [False, False], [False, True], [False, False]), truncated=flags(
+        [True, False], [False, False], [False, False]))
+    next_obs = obs.new_tensor([[7.0, 0.0], [8.0, 0.0]]).numpy()  # V = (7, 8)
+    return ValueOfFirst(), rollout, next_obs, SimpleNamespace(gamma=0.5, lam=lam)
+
+
+def a2c_targets_cases():
+    # next_values = (3, 4), (5, 6), (7, 8). lam none: env 0 truncated at t = 0 (bootstraps
+    # with V = 3), env 1 terminated at t = 1. R = (2.5, 1.5), (3.25, 1), (4.5, 5); A = R - V.
+    # lam = 0.5: deltas (1.5, 1), (0.5, -3), (-0.5, -1); A_t = delta_t + 0.25 * A_{t+1} where
+    # no episode ended at t: A = (1.5, 0.25), (0.375, -3), (-0.5, -1); R = A + V.
+    return [
+        (tr("lam none: V(s_t) = (1, 2), (3, 4), (5, 6), V(next_obs) = (7, 8); env 0 truncated "
+            "at t = 0, env 1 terminated at t = 1; gamma = 0.5",
+            "lam 为 none：V(s_t) = (1, 2), (3, 4), (5, 6)，V(next_obs) = (7, 8)；t = 0 处环境 0 "
+            "时间截断，t = 1 处环境 1 终止；gamma = 0.5"), None,
+         (t([2.5, 1.5], [3.25, 1.0], [4.5, 5.0]), t([1.5, -0.5], [0.25, -3.0], [-0.5, -1.0]))),
+        (tr("the same rollout, lam = 0.5 (GAE)", "同一批数据，lam = 0.5（GAE）"), 0.5,
+         (t([2.5, 2.25], [3.375, 1.0], [4.5, 5.0]), t([1.5, 0.25], [0.375, -3.0], [-0.5, -1.0]))),
+    ]
+
+
+def a2c_targets_mistakes(rollout, values, last):
+    r, term, trunc = rollout["rewards"], rollout["terminated"], rollout["truncated"]
+
+    def with_next(nv):
+        return common.discounted_returns(r, nv, term, trunc, 0.5)
+    return [(tr("next_values = values: V(s_t) where V(s_{t+1}) belongs (not shifted by one)",
+                "next_values = values：用了 V(s_t)，应该是 V(s_{t+1})（没有错开一步）"),
+             with_next(values)),
+            (tr("no bootstrap at the rollout's end: V(next_obs) replaced by 0",
+                "rollout 末尾没有自举：V(next_obs) 换成了 0"),
+             with_next(torch.cat([values[1:], torch.zeros_like(last)[None]]))),
+            (tr("shifted the wrong way: V(next_obs) put first, torch.cat([last, values[:-1]])",
+                "错开的方向反了：把 V(next_obs) 放在了最前面，torch.cat([last, values[:-1]])"),
+             with_next(torch.cat([last[None], values[:-1]])))]
+
+
+def check_a2c_targets(fn):
+    for what, lam, (returns, advantages) in a2c_targets_cases():
+        model, rollout, next_obs, cfg = a2c_targets_case(lam)
+        got = fn(model, rollout, next_obs, cfg)
+        try:
+            if not isinstance(got, tuple) or len(got) != 2:
+                raise Failed(tr(f"expected (returns, advantages), got {type(got).__name__}",
+                                f"应该返回 (returns, advantages)，得到的是 {type(got).__name__}"))
+            compare("returns", got[0], returns)
+            compare("advantages", got[1], advantages)
+            if got[0].requires_grad or got[1].requires_grad:
+                raise Failed(tr(
+                    "the values are right, and they carry a gradient into the critic: compute V "
+                    "under torch.no_grad() (the targets are constants; A2C's actor loss would "
+                    "otherwise train the critic)",
+                    "数值对，但它们带着梯度连到评论员：要在 torch.no_grad() 下计算 V（目标是常数；"
+                    "否则 A2C 演员的损失会去训练评论员）"))
+        except Failed as e:
+            named = ""
+            if lam is None and isinstance(got, tuple) and torch.is_tensor(got[0]):
+                values = rollout["obs"][..., 0]
+                for label, value in a2c_targets_mistakes(rollout, values, t(7.0, 8.0)):
+                    if got[0].shape == value.shape and torch.allclose(got[0].detach(), value):
+                        named = tr("\n  this is exactly what this mistake gives: ",
+                                   "\n  这正是这个错误会得到的值：") + label
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}{named}") from None
+
+
+def small_ddpg(seed=0):
+    """Tiny DDPG networks and a minibatch (3 states, 1 action), every one seeded."""
+    ddpg = importlib.import_module("ddpg_walker")
+    torch.manual_seed(seed)
+    low, high = torch.tensor([-2.0]).numpy(), torch.tensor([2.0]).numpy()
+    nets = ddpg.build(3, 1, low.astype("float64"), high.astype("float64"),
+                      SimpleNamespace(hidden=8, actor_lr=1e-2, critic_lr=1e-2), "cpu")
+    # the targets apart from the networks, as after some training (a target = its network
+    # would hide a target taken from the network being trained)
+    with torch.no_grad():
+        for net in (nets["actor_target"], nets["critic_target"]):
+            for p in net.parameters():
+                p.add_(0.3 * torch.randn_like(p))
+    batch = (torch.randn(4, 3), torch.rand(4, 1) * 4 - 2, torch.randn(4), torch.randn(4, 3),
+             t(1.0, 0.0, 1.0, 1.0))
+    return nets, batch, SimpleNamespace(gamma=0.9, tau=0.1)
+
+
+def ddpg_critic_mistakes(nets, batch, cfg):
+    obs, action, reward, next_obs, not_done = batch
+    c, a, ct, at = nets["critic"], nets["actor"], nets["critic_target"], nets["actor_target"]
+    with torch.no_grad():
+        q = c(obs, action)
+        return [(tr("the target from the critic being trained, Q(s', mu'(s')), not the target "
+                    "critic Q'", "TD 目标用了正在训练的评论员 Q(s', mu'(s'))，不是目标评论员 Q'"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * c(next_obs, at(next_obs)))),
+                (tr("the target's action from the actor being trained, mu(s'), not mu'(s')",
+                    "目标里的动作用了正在训练的演员 mu(s')，不是 mu'(s')"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * ct(next_obs, a(next_obs)))),
+                (tr("the target at s, not s' (obs and next_obs mixed up)",
+                    "目标在 s 处取值，不是 s'（obs 和 next_obs 弄混了）"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * ct(obs, at(obs)))),
+                (tr("Q(s', a) compared with the target (next_obs where obs belongs)",
+                    "用 Q(s', a) 去和目标比（该用 obs 的地方用了 next_obs）"),
+                 F.mse_loss(c(next_obs, action), reward + cfg.gamma * not_done * ct(
+                     next_obs, at(next_obs))))]
+
+
+def check_ddpg_update(fn):
+    own = importlib.import_module("ddpg_walker").ddpg_update
+    theirs, batch, cfg = small_ddpg()
+    yours = copy.deepcopy(theirs)
+    mistakes = ddpg_critic_mistakes(yours, batch, cfg)
+    expected = own(*theirs.values(), batch, cfg)
+    got = fn(*yours.values(), batch, cfg)
+    case = tr("case: one update of tiny networks (3 states, 1 action, 4 samples, the second "
+              "terminated), gamma = 0.9, tau = 0.1, beside the script's own\n  ",
+              "例子：小网络上的一次更新（状态 3 维、动作 1 维、4 个样本，第二个终止），gamma = 0.9，"
+              "tau = 0.1，和脚本自己的并排比较\n  ")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise Failed(case + tr(f"expected (critic_loss, actor_loss), got {type(got).__name__}",
+                               f"应该返回 (critic_loss, actor_loss)，得到的是 {type(got).__name__}"))
+    for name in ("critic_target", "actor_target"):
+        if any(p.grad is not None for p in yours[name].parameters()):
+            raise Failed(case + tr(
+                f"a gradient reached {name}: the target was computed with the graph (put it "
+                f"under torch.no_grad(); the target is a constant)",
+                f"梯度传到了 {name}：TD 目标是带着计算图算的（放进 torch.no_grad()；目标是常数）"))
+    try:
+        compare("critic_loss", got[0], expected[0])
+    except Failed as e:
+        named = [label for label, value in mistakes if abs(float(got[0]) - float(value)) < 1e-5]
+        raise Failed(case + str(e) + (tr("\n  this is exactly what this mistake gives: ",
+                                         "\n  这正是这个错误会得到的值：") + named[0]
+                                      if named else "")) from None
+    steps = [("critic", tr("the critic after its step", "评论员更新之后")),
+             ("actor", tr("the actor after its step", "演员更新之后")),
+             ("critic_target", tr("the critic's target after the soft update",
+                                  "软更新之后的目标评论员")),
+             ("actor_target", tr("the actor's target after the soft update",
+                                 "软更新之后的目标演员"))]
+    for name, what in steps:
+        for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
+            if not torch.allclose(p, q, atol=1e-6):
+                hint = dict(
+                    critic=tr("one critic step toward y (critic_opt.zero_grad(), backward, step)",
+                              "朝 y 做一步评论员更新（critic_opt.zero_grad()、backward、step）"),
+                    actor=tr("the actor's step comes after the critic's, on the updated critic, "
+                             "and changes only the actor (backward(inputs=actor's parameters) "
+                             "or zero the critic's gradients)",
+                             "演员在评论员更新之后、用更新过的评论员来更新，并且只改演员"
+                             "（backward(inputs=演员的参数)，或者清掉评论员的梯度）"),
+                    critic_target=tr("soft_update(critic_target, critic, tau) after both steps",
+                                     "两步都做完之后 soft_update(critic_target, critic, tau)"),
+                    actor_target=tr("soft_update(actor_target, actor, tau) after both steps",
+                                    "两步都做完之后 soft_update(actor_target, actor, tau)"))[name]
+                raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
+                                       f"(largest difference {float((p - q).detach().abs().max()):.3g}): ",
+                                       f"{what}：{pname} 和脚本自己的不同（最大相差 "
+                                       f"{float((p - q).detach().abs().max()):.3g}）：") + hint)
+    compare("actor_loss", got[1], expected[1])
+
+
 def check_soft_update(fn):
     target, source = torch.nn.Linear(2, 1), torch.nn.Linear(2, 1)
     with torch.no_grad():
@@ -557,6 +736,10 @@ def worked_cases(ex, fn):
         return check_soft_update(fn)
     if ex.function == "update_critics":
         return check_td3_target(fn)
+    if ex.function == "a2c_targets":
+        return check_a2c_targets(fn)
+    if ex.function == "ddpg_update":
+        return check_ddpg_update(fn)
     for what, args, expected in ex.cases():
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
         got = fn(*args)
@@ -893,7 +1076,9 @@ DDPG_LOOP = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=600, start_steps=300, 
                  eval_episodes=1, print_every=1, gifs=False, curves=False, cuda=False)
 DDPG_LEARN = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=20_000, print_every=10**6,
                   gifs=False, curves=False, cuda=False)
-TD3_LOOP, TD3_LEARN = DDPG_LOOP, DDPG_LEARN
+# TD3 on the same task and settings; 30,000 steps: its delayed actor starts slower (seed 0
+# holds 1000 from step 27,500 on, tests/test_td3_walker.py)
+TD3_LOOP, TD3_LEARN = DDPG_LOOP, dict(DDPG_LEARN, total_timesteps=30_000)
 # GRPO: a short supervised phase, then a few GRPO steps (the loop); the default run (learning)
 GRPO_LOOP = dict(seed=0, sft_steps=20, grpo_steps=4, prompts=8, eval_every=20, eval_prompts=20,
                  curves=False, print_every=10**6)
@@ -970,6 +1155,15 @@ EXERCISES = {ex.name: ex for ex in (
              outputs=("adv",), mistakes=group_mistakes),
     exercise("grpo_loss", "grpo_addition", "grpo_loss", "grpo_addition", grpo_cases, GRPO_LOOP,
              GRPO_LEARN, ON_REAL_DATA, outputs=("loss", "info"), mistakes=grpo_mistakes),
+    exercise("a2c_targets", "actor_critic_cartpole", "a2c_targets", "actor_critic_cartpole",
+             lambda: [], dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN,
+             lambda: tr("A2C's targets and advantages come from your function: the first update "
+                        "that differs is\n  where they differ on real rollouts (several envs, "
+                        "autoreset steps).",
+                        "A2C 的目标和优势来自你的函数：第一次不同的更新，就是它们在真实 rollout 上"
+                        "\n  （多个环境、自动重置步）开始不同的地方。"), outputs=("returns", "advantages")),
+    exercise("ddpg_update", "ddpg_walker", "ddpg_update", "ddpg_walker", lambda: [], DDPG_LOOP,
+             DDPG_LEARN, OFF_POLICY, outputs=("critic_loss", "actor_loss")),
     exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", lambda: [], DDPG_LOOP,
              DDPG_LEARN, lambda: tr("The targets move by your soft update. ",
                                     "目标网络按你的软更新移动。") + OFF_POLICY()),

@@ -267,6 +267,93 @@ WRONG = {
                 loss = -per_token.sum() / mask.sum()  # one mean over tokens
                 return loss, dict(kl=0.0, clipfrac=0.0, ratio=ratio.detach())""", "(a)", "one mean over all the batch's tokens"),
     ],
+    "a2c_targets": [
+        ("""def a2c_targets(model, rollout, next_obs, cfg):
+                import common
+                _, values = model(rollout["obs"])  # no torch.no_grad()
+                _, last = model(torch.as_tensor(next_obs, dtype=torch.float32))
+                next_values = torch.cat([values[1:], last[None]])
+                if cfg.lam is None:
+                    returns = common.discounted_returns(rollout["rewards"], next_values,
+                                                        rollout["terminated"], rollout["truncated"], cfg.gamma)
+                    return returns, returns - values
+                advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
+                                        rollout["truncated"], cfg.gamma, cfg.lam)
+                return advantages + values, advantages""", "(a)", "carry a gradient into the critic"),
+        ("""def a2c_targets(model, rollout, next_obs, cfg):
+                import common
+                with torch.no_grad():
+                    _, values = model(rollout["obs"])
+                    next_values = values  # not shifted
+                if cfg.lam is None:
+                    returns = common.discounted_returns(rollout["rewards"], next_values,
+                                                        rollout["terminated"], rollout["truncated"], cfg.gamma)
+                    return returns, returns - values
+                advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
+                                        rollout["truncated"], cfg.gamma, cfg.lam)
+                return advantages + values, advantages""", "(a)", "next_values = values"),
+        ("""def a2c_targets(model, rollout, next_obs, cfg):
+                import common
+                with torch.no_grad():
+                    _, values = model(rollout["obs"])
+                    next_values = torch.cat([values[1:], torch.zeros_like(values[:1])])  # no bootstrap
+                if cfg.lam is None:
+                    returns = common.discounted_returns(rollout["rewards"], next_values,
+                                                        rollout["terminated"], rollout["truncated"], cfg.gamma)
+                    return returns, returns - values
+                advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
+                                        rollout["truncated"], cfg.gamma, cfg.lam)
+                return advantages + values, advantages""", "(a)", "no bootstrap at the rollout's end"),
+    ],
+    "ddpg_update": [
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    y = td_target(reward, not_done, critic(next_obs, actor_target(next_obs)), cfg.gamma)
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_opt.zero_grad()
+                critic_loss.backward()
+                critic_opt.step()
+                actor_loss = compute_loss_actor(actor, critic, obs)
+                actor_opt.zero_grad()
+                actor_loss.backward(inputs=list(actor.parameters()))
+                actor_opt.step()
+                soft_update(critic_target, critic, cfg.tau)
+                soft_update(actor_target, actor, cfg.tau)
+                return critic_loss.detach(), actor_loss.detach()""", "(a)", "the target from the critic being trained"),
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_opt.zero_grad()
+                critic_loss.backward()
+                critic_opt.step()
+                actor_loss = compute_loss_actor(actor, critic, obs)
+                actor_opt.zero_grad()
+                actor_loss.backward(inputs=list(actor.parameters()))
+                actor_opt.step()
+                soft_update(critic_target, critic, cfg.tau)
+                soft_update(actor_target, actor, cfg.tau)
+                return critic_loss.detach(), actor_loss.detach()""", "(a)", "a gradient reached critic_target"),
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_opt.zero_grad()
+                critic_loss.backward()
+                critic_opt.step()
+                actor_loss = compute_loss_actor(actor, critic, obs)
+                actor_opt.zero_grad()
+                actor_loss.backward(inputs=list(actor.parameters()))
+                actor_opt.step()
+                soft_update(critic_target, critic, cfg.tau)
+                # the actor's target forgotten
+                return critic_loss.detach(), actor_loss.detach()""", "(a)", "the actor's target after the soft update"),
+    ],
     "soft_update": [
         ("""def soft_update(target, source, tau):
                 with torch.no_grad():
