@@ -1,17 +1,21 @@
 """Check an exercise: python exercises/check.py gae   (no name: a table of all of them)
 
 Three stages, each stopped at the first that fails:
-  (a) worked cases: your function on hand-computed examples, the traps included;
+  (a) worked cases: your function on hand-computed examples, the traps included; for a loss,
+      its gradient too, against the script's own function's (cut, reversed, or wrong); a wrong
+      value that a known mistake gives is named;
   (b) the real loop: the script's own train() on a fixed seed, for a few updates, once with
       your function swapped in and once with the script's own; their logs are compared update
-      by update, and the first quantity that differs is named with both values;
-  (c) learning: the script with your function solves its task (docs/exercises.md gives each
-      one's time). --no-learning stops after (b).
+      by update, and the first quantity that differs is named with both values (and a loop
+      that never calls your function fails loudly);
+  (c) learning: the script with your function does what it is for (docs/exercises.md gives
+      each one's bar and time). --no-learning stops after (b).
 Your function reaches the script as the experiments' variants do (experiments/lab.swapped):
-the script itself has no branch and no flag for it.
+the script itself has no branch and no flag for it. Messages in Chinese or English: --lang,
+else the locale. Exit status 0 only when every stage run passed.
 
-中文：检查练习。三关：(a) 手算的例子；(b) 把你的函数换进脚本自己的 train()，和原版逐次更新比较日志；
-(c) 用你的函数把任务学会。
+中文：检查练习。三关：(a) 手算的例子（损失函数还比较梯度）；(b) 把你的函数换进脚本自己的 train()，
+和原版逐次更新比较日志；(c) 用你的函数把任务学会。--lang zh 显示中文（默认跟随系统的语言设置）。
 """
 
 import argparse
@@ -442,6 +446,10 @@ def ddpg_critic_mistakes(nets, batch, cfg):
                      next_obs, at(next_obs))))]
 
 
+def gap(p, q):
+    return float((p - q).detach().abs().max())
+
+
 def check_ddpg_update(fn):
     own = importlib.import_module("ddpg_walker").ddpg_update
     theirs, batch, cfg = small_ddpg()
@@ -491,9 +499,9 @@ def check_ddpg_update(fn):
                     actor_target=tr("soft_update(actor_target, actor, tau) after both steps",
                                     "两步都做完之后 soft_update(actor_target, actor, tau)"))[name]
                 raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
-                                       f"(largest difference {float((p - q).detach().abs().max()):.3g}): ",
+                                       f"(largest difference {gap(p, q):.3g}): ",
                                        f"{what}：{pname} 和脚本自己的不同（最大相差 "
-                                       f"{float((p - q).detach().abs().max()):.3g}）：") + hint)
+                                       f"{gap(p, q):.3g}）：") + hint)
     compare("actor_loss", got[1], expected[1])
 
 
@@ -648,8 +656,9 @@ def compare(name, got, expected):
 def rounded(x):
     """A tensor as nested lists of numbers to 6 significant digits (float32's noise left out)."""
     x = x.detach().tolist()
-    return [rounded(torch.tensor(v)) for v in x] if isinstance(x, list) and x and isinstance(
-        x[0], list) else [float(f"{v:.6g}") for v in x] if isinstance(x, list) else float(f"{x:.6g}")
+    if isinstance(x, list) and x and isinstance(x[0], list):
+        return [rounded(torch.tensor(v)) for v in x]
+    return [float(f"{v:.6g}") for v in x] if isinstance(x, list) else float(f"{x:.6g}")
 
 
 def show(ex, args):
@@ -675,8 +684,10 @@ def gradients(f, args, parameters):
     if not (torch.is_tensor(loss) and loss.requires_grad):
         return None
     loss.backward()
-    leaves = [(name, p) for a in args if isinstance(a, Fixed) for name, p in zip(a.names, a.outputs)]
-    leaves += [(name, a) for name, a in zip(parameters, args) if torch.is_tensor(a) and a.requires_grad]
+    leaves = [(name, p) for a in args if isinstance(a, Fixed)
+              for name, p in zip(a.names, a.outputs)]
+    leaves += [(name, a) for name, a in zip(parameters, args)
+               if torch.is_tensor(a) and a.requires_grad]
     return {name: torch.zeros_like(p) if p.grad is None else p.grad for name, p in leaves}
 
 
@@ -710,9 +721,10 @@ def compare_gradients(ex, fn, args):
                 f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0"))
         if r.abs().max() <= 1e-8:
             raise Failed(tr(
-                f"a gradient where none belongs: the value is right, and your loss sends a gradient "
-                f"into {name},\n  which this loss must not train (a quantity that should be a "
-                f"constant, e.g. an advantage\n  recomputed from the live network, carries it): "
+                f"a gradient where none belongs: the value is right, and your loss sends a "
+                f"gradient into {name},\n  which this loss must not train (a quantity that "
+                f"should be a constant, e.g. an advantage\n  recomputed from the live network, "
+                f"carries it): "
                 f"got {rounded(g)}, expected zeros",
                 f"多出来的梯度：数值对，但你的损失把梯度传进了 {name}，这个损失不该训练它（本该是常数的"
                 f"量带着梯度，\n  例如用正在训练的网络重新算的优势）：得到 {rounded(g)}，应该是 0"))
@@ -803,7 +815,7 @@ def returns_mistakes(r, nv, term, trunc, gamma):
                 "把时间截断当成了终止（那里没有自举）"),
              returns_with(r, nv, term, trunc, gamma, trunc_boots=False)),
             (tr("truncation wins where both flags are set (termination must win)",
-                "两个标志都在时按截断算了（应该按终止算）"),
+                "两个标志都在时按时间截断算了（应该按终止算）"),
              returns_with(r, nv, term, trunc, gamma, term_wins=False)),
             (tr("the future is not reset where an episode terminated (the next episode's "
                 "rewards leak in)", "回合终止处没有把未来清零（下一个回合的奖励漏了进来）"),
@@ -818,7 +830,7 @@ def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
                 "累加越过了时间截断（后面属于下一个回合）"),
              gae_with(r, v, nv, term, trunc, gamma, lam, cut_at_trunc=False)),
             (tr("truncation wins where both flags are set: delta bootstraps at a termination",
-                "两个标志都在时按截断算了：终止处的 delta 还在自举"),
+                "两个标志都在时按时间截断算了：终止处的 delta 还在自举"),
              gae_with(r, v, nv, term, trunc, gamma, lam, term_wins=False)),
             (tr("lam left out of the sum (gamma * A_{t+1}, not gamma * lam * A_{t+1})",
                 "累加时漏了 lam（写成了 gamma * A_{t+1}，应该是 gamma * lam * A_{t+1}）"),
@@ -951,7 +963,8 @@ def loop_logs(ex, fn, tmp):
         def recorded(*args):
             out = update(*args)
             first, second = (out if isinstance(out, tuple) else (out, torch.tensor(0.0)))
-            losses.append(dict(critic_loss=f"{first.item():.6g}", actor_loss=f"{second.item():.6g}"))
+            losses.append(dict(critic_loss=f"{first.item():.6g}",
+                               actor_loss=f"{second.item():.6g}"))
             return out
         swaps = [s for s in swaps if s[1] != update_fn] + [(script, update_fn, recorded)]
     with swapped(swaps), contextlib.redirect_stdout(io.StringIO()):
@@ -960,8 +973,10 @@ def loop_logs(ex, fn, tmp):
     if update_fn:
         if ex.script == "td3_walker":  # update_critics gives the critics' loss only
             losses = [dict(critic_loss=row["critic_loss"]) for row in losses]
-        return [dict(row, step=str(ex.loop["start_steps"] + i + 1)) for i, row in enumerate(losses)] + [
-            dict(r, where="evaluation") for r in csv.DictReader(open(run / "evaluations.csv"))]
+        steps = [dict(row, step=str(ex.loop["start_steps"] + i + 1))
+                 for i, row in enumerate(losses)]
+        return steps + [dict(r, where="evaluation")
+                        for r in csv.DictReader(open(run / "evaluations.csv"))]
     return list(csv.DictReader(open(run / "progress.csv")))
 
 
@@ -972,7 +987,8 @@ def never_called(ex, stage):
     return Failed(tr(
         f"{ex.script}.train() never called {ex.function} in {stage}: the script no longer uses "
         f"the function this\n  exercise checks (its settings or its code changed), so the stage "
-        f"would pass whatever you wrote.\n  This is the checker's fault, not yours: please report it.",
+        f"would pass whatever you wrote.\n  This is the checker's fault, not yours: please "
+        f"report it.",
         f"{ex.script}.train() 在{stage}里一次也没有调用 {ex.function}：脚本已经不用这个练习检查的函数了"
         f"（它的设置或代码变了），\n  所以这一关无论你写什么都会通过。这是检查程序的问题，不是你的：请报告它。"))
 
@@ -1008,7 +1024,8 @@ def real_loop(ex, fn):
             where = (tr(f"evaluation at step {a['global_step']}", f"第 {a['global_step']} 步的评估")
                      if a.get("where") else (f"{unit} {n}" if LANG == "en" else unit.format(n)))
             raise Failed(tr(f"{ex.script}.train() with your function: the logs first differ at "
-                            f"{where}, in {key}: the script's own gives {a[key]}, yours {b.get(key)}",
+                            f"{where}, in {key}: the script's own gives {a[key]}, yours "
+                            f"{b.get(key)}",
                             f"换上你的函数后，{ex.script}.train() 的日志第一次不同是在{where}，"
                             f"{key}：脚本自己的是 {a[key]}，你的是 {b.get(key)}")
                          + f"\n  {ex.loop_hint()}")
@@ -1083,7 +1100,7 @@ TD3_LOOP, TD3_LEARN = DDPG_LOOP, dict(DDPG_LEARN, total_timesteps=30_000)
 GRPO_LOOP = dict(seed=0, sft_steps=20, grpo_steps=4, prompts=8, eval_every=20, eval_prompts=20,
                  curves=False, print_every=10**6)
 GRPO_LEARN = dict(seed=0, curves=False, print_every=10**6)
-GRPO_BAR = 0.9  # held-out pass@1 after GRPO: seeds 0-4 gave 0.941 to 0.955, the start 0.70-0.76  # TD3 on the same task, at the same settings
+GRPO_BAR = 0.9  # held-out pass@1 after GRPO: seeds 0-4 gave 0.941 to 0.955, the start 0.70-0.76
 
 
 def ON_REAL_DATA():
@@ -1123,7 +1140,8 @@ EXERCISES = {ex.name: ex for ex in (
              lambda: tr("PPO's advantages and value targets come from your GAE: the first "
                         "update that\n  differs is where your GAE differs on real rollouts.",
                         "PPO 的优势和价值目标来自你的 GAE：第一次不同的更新，就是你的 GAE 在"
-                        "\n  真实 rollout 上开始不同的地方。"), outputs=("advantages",), mistakes=gae_mistakes),
+                        "\n  真实 rollout 上开始不同的地方。"), outputs=("advantages",),
+             mistakes=gae_mistakes),
     exercise("clipped_surrogate", "ppo_cartpole", "compute_loss_pi", "ppo_cartpole",
              clip_cases, dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
              ON_REAL_DATA, outputs=("loss_pi", "entropy", "info"), mistakes=clip_mistakes),
@@ -1139,7 +1157,8 @@ EXERCISES = {ex.name: ex for ex in (
              outputs=("loss", "stats"), mistakes=a2c_mistakes),
     exercise("td_target", "ddpg_walker", "td_target", "ddpg_walker", td_cases, DDPG_LOOP,
              DDPG_LEARN, lambda: tr("The critic is trained toward your targets. ",
-                                    "评论员朝你的目标训练。") + OFF_POLICY(), outputs=("y",), mistakes=td_mistakes),
+                                    "评论员朝你的目标训练。") + OFF_POLICY(), outputs=("y",),
+             mistakes=td_mistakes),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
              DDPG_LOOP, DDPG_LEARN, OFF_POLICY, outputs=("actor_loss",), mistakes=actor_mistakes),
     exercise("td3_target", "td3_walker", "update_critics", "td3_walker", lambda: [], TD3_LOOP,
@@ -1224,8 +1243,8 @@ def main(argv=None):
     parser.add_argument("name", nargs="?", choices=sorted(EXERCISES), help="the exercise")
     parser.add_argument("--no-learning", action="store_true", help="stop after stage (b)")
     parser.add_argument("--lang", choices=("zh", "en"), default=None,
-                        help="the messages' language (default: from the locale, e.g. LANG=zh_CN.UTF-8 "
-                             "gives zh; else en)")
+                        help="the messages' language (default: from the locale, e.g. "
+                             "LANG=zh_CN.UTF-8 gives zh; else en)")
     args = parser.parse_args(argv)
     LANG = args.lang or locale_lang()
     if args.name:

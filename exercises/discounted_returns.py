@@ -8,7 +8,7 @@ it is estimated by V. Where the episode really ended (terminated), it is 0.
     python exercises/check.py discounted_returns
 The reference answer: common.discounted_returns (common.py).
 
-中文：练习：带截断自举的折扣回报（A2C 的 n 步目标）。对照教程 004：评论员的目标是回报 R_t，
+中文：练习：在 rollout 末尾和时间截断处自举的折扣回报（A2C 的 n 步目标）。对照教程 004：评论员的目标是回报 R_t，
 优势 A = R - V。从后往前算 R_t = r_t + gamma * R_{t+1}；rollout 的最后一步和时间截断
 （truncated）处用 V 估计未来，真正结束（terminated）处未来为 0。参考答案：common.discounted_returns。
 """

@@ -38,6 +38,7 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
     with torch.no_grad():  # what the log shows (the script's own lines)
         n = mask.sum()
         info = dict(kl=((kl * mask).sum() / n).item(),
-                    clipfrac=((((ratio - 1).abs() > cfg.clip_coef).float() * mask).sum() / n).item(),
+                    clipfrac=((((ratio - 1).abs() > cfg.clip_coef).float() * mask).sum()
+                              / n).item(),
                     ratio=ratio[mask > 0].detach())
     return loss, info
