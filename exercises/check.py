@@ -99,7 +99,8 @@ class Fixed(torch.nn.Module):
 
 
 def returns_cases():
-    r, v = t([1.0, 1.0], [1.0, 1.0], [1.0, 1.0]), t([9.0, 9.0], [9.0, 9.0], [4.0, 4.0])
+    # V(s_1) = (8, 7) differs from V(s_2) = 9: a bootstrap from the wrong step shows
+    r, v = t([1.0, 1.0], [1.0, 1.0], [1.0, 1.0]), t([8.0, 7.0], [9.0, 9.0], [4.0, 4.0])
     no = flags([False, False], [False, False], [False, False])
     at1 = flags([False, False], [True, True], [False, False])
     env0 = flags([False, False], [True, False], [False, False])
@@ -257,17 +258,21 @@ def group_mistakes(rewards, G, scale):
                 "分组分错了（view(G, -1)）：一组是连续的 G 个奖励"),
              (lambda r: (r - r.mean(0, keepdim=True)) / (
                  r.std(0, keepdim=True) + 1e-4 if scale else 1))(rewards.view(G, -1)).reshape(-1)),
-            (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"), adv(eps=0.0))]
+            (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"), adv(eps=0.0)),
+            (tr("scale ignored: divided by the std where scale = False asks for r - mean only",
+                "忽略了 scale：scale = False 时只减均值，不除以标准差"),
+             (lambda r: ((r - r.mean(1, keepdim=True)) / (r.std(1, keepdim=True) + 1e-4)))(
+                 rewards.view(-1, G)).reshape(-1))]
 
 
 def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no_mask=False,
-                 token_mean=False, kl_sign=1.0, no_clip=False):
+                 token_mean=False, kl_sign=1.0, no_clip=False, ratio_one=False):
     """The loss element by element, in plain Python (and the named mistakes' versions)."""
     eps, per_completion, total, tokens = cfg.clip_coef, [], 0.0, 0.0
     for i in range(len(adv)):
         row = 0.0
         for j in range(logp.shape[1]):
-            r = math.exp(float(logp[i, j] - logp_old[i, j]))
+            r = 1.0 if ratio_one else math.exp(float(logp[i, j] - logp_old[i, j]))
             a = float(adv[i])
             s = r * a if no_clip else min(r * a, min(max(r, 1 - eps), 1 + eps) * a)
             x = float(logp[i, j] - logp_ref[i, j]) if kl_reversed else float(
@@ -319,6 +324,9 @@ def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
             (tr("no clip: r * A alone, without min(.., clip(r) A)",
                 "没有裁剪：只用了 r * A，没有 min(.., clip(r) A)"),
              grpo_by_hand(*args, cfg, no_clip=True)),
+            (tr("the ratio against logp itself (always 1): pi_old is logp_old",
+                "比值的分母用了 logp 自己（比值总是 1）：pi_old 是 logp_old"),
+             grpo_by_hand(*args, cfg, ratio_one=True)),
             (tr("the sign: the objective returned, where the loss is its negative",
                 "符号反了：返回的是目标函数，损失应该取负"), -grpo_by_hand(*args, cfg))]
 
@@ -516,13 +524,17 @@ def check_soft_update(fn):
         fn(target, source, 0.1)
         got = [round(float(x), 6) for p in target.parameters() for x in p.detach().flatten()]
         if got != [expected] * 3:
+            swapped_tau = tr("\n  this is exactly what this mistake gives: tau and 1 - tau "
+                             "swapped (the target jumps most of the way)",
+                             "\n  这正是这个错误会得到的值：tau 和 1 - tau 放反了（目标网络一下子移动了"
+                             "大部分距离）") if got == [0.9] * 3 else ""
             raise Failed(tr(
                 f"case: theta' = 0, theta = 1, tau = 0.1, twice: 0.1, then 0.19\n  target's "
                 f"weights and bias after soft_update: expected {expected} each (theta' = tau * "
                 f"theta + (1 - tau) * theta'), got {got}",
                 f"例子：theta' = 0，theta = 1，tau = 0.1，做两次：先 0.1，再 0.19\n  软更新后目标网络的"
                 f"权重和偏置：应该都是 {expected}（theta' = tau * theta + (1 - tau) * theta'），"
-                f"得到的是 {got}"))
+                f"得到的是 {got}") + swapped_tau)
     if [id(p) for p in target.parameters()] != before:
         raise Failed(tr("the target's parameters were replaced, not updated in place",
                         "目标网络的参数被换成了新的张量，而不是原地更新"))
@@ -780,11 +792,11 @@ def worked_cases(ex, fn):
 
 
 def returns_with(r, nv, term, trunc, gamma, cut=True, trunc_boots=True, term_wins=True,
-                 term_resets=True):
+                 term_resets=True, shift=0):
     out, future = torch.zeros_like(r), (nv[-1] if cut else torch.zeros_like(r[0]))
     zero = torch.zeros_like(r[0])
     for t in reversed(range(len(r))):
-        boot = nv[t] if trunc_boots else zero
+        boot = (nv[t - shift] if trunc_boots else zero)
         ended = term[t] if term_resets else torch.zeros_like(term[t])
         if term_wins:
             future = torch.where(ended, zero, torch.where(trunc[t], boot, future))
@@ -817,6 +829,10 @@ def returns_mistakes(r, nv, term, trunc, gamma):
             (tr("truncation wins where both flags are set (termination must win)",
                 "两个标志都在时按时间截断算了（应该按终止算）"),
              returns_with(r, nv, term, trunc, gamma, term_wins=False)),
+            (tr("at a truncation, the value of the step before, next_values[t - 1], where "
+                "V(final obs) is next_values[t]", "时间截断处用了前一步的 next_values[t - 1]，"
+                "V(最后的观测) 是 next_values[t]"),
+             returns_with(r, nv, term, trunc, gamma, shift=1)),
             (tr("the future is not reset where an episode terminated (the next episode's "
                 "rewards leak in)", "回合终止处没有把未来清零（下一个回合的奖励漏了进来）"),
              returns_with(r, nv, term, trunc, gamma, term_resets=False))]
@@ -842,10 +858,15 @@ def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
              gae_with(r, v, nv, term, trunc, gamma, lam, term_resets=False))]
 
 
-def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False):
+def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,
+              renormalized=False, upper_only=False):
     logp = Categorical(logits=policy(data["obs"])).log_prob(data["act"]).detach()
     r = torch.exp(data["logp"] - logp) if inverted else torch.exp(logp - data["logp"])
     a = data["adv"]
+    if renormalized:
+        a = (a - a.mean()) / (a.std() + 1e-8)
+    if upper_only:
+        return -torch.min(r * a, r.clamp(max=1 + eps) * a).mean()
     if clip_product:
         return -(r * a).clamp(1 - eps, 1 + eps).mean()
     return -(torch.max if use_max else torch.min)(r * a, r.clamp(1 - eps, 1 + eps) * a).mean()
@@ -863,7 +884,13 @@ def clip_mistakes(policy, data, eps):
             (tr("the sign: the objective L_CLIP returned, where the loss is -L_CLIP",
                 "符号反了：返回的是目标 L_CLIP，损失应该是 -L_CLIP"), -right),
             (tr("a sum over the batch where the mean belongs", "对批量求了和，应该求均值"),
-             right * len(data["adv"]))]
+             right * len(data["adv"])),
+            (tr("the advantages normalized again inside the loss (they come normalized: use them "
+                "as they are)", "在损失里又把优势归一化了一次（给的优势已经归一化过，直接用）"),
+             surrogate(policy, data, eps, renormalized=True)),
+            (tr("the ratio clipped from above only (clamp(max=1 + eps)): the band has two edges",
+                "只从上面裁剪了比值（clamp(max=1 + eps)）：区间有上下两个边"),
+             surrogate(policy, data, eps, upper_only=True))]
 
 
 def kl_mistakes(policy, data, beta):
@@ -878,7 +905,11 @@ def kl_mistakes(policy, data, beta):
             (tr("the surrogate's sign: +mean(r A) where the loss has -mean(r A)",
                 "代理目标的符号反了：损失里应该是 -mean(r A)"), s + beta * kl),
             (tr("the penalty's sign: - beta * KL where the loss adds it",
-                "惩罚项的符号反了：损失里应该加上 beta * KL"), -s - beta * kl)]
+                "惩罚项的符号反了：损失里应该加上 beta * KL"), -s - beta * kl),
+            (tr("a sample estimate of the KL, mean(logp_old - logp), where the exact KL of the two "
+                "distributions belongs (kl_divergence)", "用了 KL 的样本估计 mean(logp_old - logp)，"
+                "应该用两个分布的精确 KL（kl_divergence）"),
+             -s + beta * (data["logp"] - dist.log_prob(data["act"])).mean())]
 
 
 def a2c_mistakes(model, data, cfg):

@@ -40,6 +40,13 @@ WRONG = {
                     future = torch.where(truncated[t], next_values[t], future)
                     returns[t] = future = rewards[t] + gamma * future
                 return returns""", "(a)", "truncation wins where both flags are set"),
+        ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
+                returns, future = torch.zeros_like(rewards), next_values[-1]
+                for t in reversed(range(len(rewards))):  # the value one step off at a time limit
+                    future = torch.where(truncated[t], next_values[t - 1], future)
+                    future = torch.where(terminated[t], 0.0, future)
+                    returns[t] = future = rewards[t] + gamma * future
+                return returns""", "(a)", "next_values[t - 1]"),
     ],
     "gae": [
         ("""def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
@@ -87,6 +94,12 @@ WRONG = {
                 ratio = torch.exp(logp - data["logp"])  # the product clipped, not the ratio
                 loss = -(ratio * data["adv"]).clamp(1 - clip_coef, 1 + clip_coef).mean()
                 return loss, dist.entropy().mean(), {}""", "(a)", "the product r * A clipped"),
+        ("""def compute_loss_pi(policy, data, clip_coef):
+                dist = Categorical(logits=policy(data["obs"]))
+                ratio = torch.exp(dist.log_prob(data["act"]) - data["logp"])
+                adv = data["adv"]  # clipped from above only
+                loss = -torch.min(ratio * adv, ratio.clamp(max=1 + clip_coef) * adv).mean()
+                return loss, dist.entropy().mean(), {}""", "(a)", "clipped from above only"),
     ],
     "kl_penalty": [
         ("""def compute_loss_pi(policy, data, beta):
@@ -359,7 +372,7 @@ WRONG = {
                 with torch.no_grad():
                     for pt, p in zip(target.parameters(), source.parameters()):
                         pt.mul_(tau).add_((1 - tau) * p)  # tau on the wrong side""", "(a)",
-         "expected 0.1"),
+         "tau and 1 - tau swapped"),
         ("""def soft_update(target, source, tau):
                 target.load_state_dict(source.state_dict())  # a hard copy""", "(a)", "expected 0.1"),
         ("""def soft_update(target, source, tau):
@@ -428,7 +441,7 @@ def test_the_scripts_own_function_passes_the_cases_and_the_loop(name):
     assert passed, lines
 
 
-@pytest.mark.parametrize("name,index", [(name, i) for name in WRONG for i in range(3)])
+@pytest.mark.parametrize("name,index", [(name, i) for name in WRONG for i in range(len(WRONG[name]))])
 def test_a_wrong_answer_fails_at_the_earliest_stage_that_sees_it(name, index):
     source, stage, needle = WRONG[name][index]
     passed, lines = run(name, compile_answer(source, name))
