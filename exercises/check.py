@@ -1192,6 +1192,9 @@ EXERCISES = {ex.name: ex for ex in (
              mistakes=td_mistakes),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
              DDPG_LOOP, DDPG_LEARN, OFF_POLICY, outputs=("actor_loss",), mistakes=actor_mistakes),
+    exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", lambda: [], DDPG_LOOP,
+             DDPG_LEARN, lambda: tr("The targets move by your soft update. ",
+                                    "目标网络按你的软更新移动。") + OFF_POLICY()),
     exercise("td3_target", "td3_walker", "update_critics", "td3_walker", lambda: [], TD3_LOOP,
              TD3_LEARN, lambda: tr("Both critics are trained toward your target; the noise comes "
                                    "from torch's generator in\n  the script's order "
@@ -1214,9 +1217,6 @@ EXERCISES = {ex.name: ex for ex in (
                         "\n  （多个环境、自动重置步）开始不同的地方。"), outputs=("returns", "advantages")),
     exercise("ddpg_update", "ddpg_walker", "ddpg_update", "ddpg_walker", lambda: [], DDPG_LOOP,
              DDPG_LEARN, OFF_POLICY, outputs=("critic_loss", "actor_loss")),
-    exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", lambda: [], DDPG_LOOP,
-             DDPG_LEARN, lambda: tr("The targets move by your soft update. ",
-                                    "目标网络按你的软更新移动。") + OFF_POLICY()),
 )}
 
 
@@ -1288,7 +1288,7 @@ def main(argv=None):
         all_passed &= passed
         stage, _, why = lines[-1].removeprefix(f"{name}: ").partition(f": {fail}: ")
         verdict = (tr("(a) and (b) pass", "(a) 和 (b) 通过") if passed else
-                   f"{fail} " + tr("at ", "于 ") + f"{stage}: {why.splitlines()[0]}")
+                   tr(f"FAIL at {stage}: ", f"{stage}未通过：") + why.splitlines()[0])
         if name in BUGS and not passed:  # where it fails would give the bug away
             verdict = tr("not fixed yet", "还没改好")
         print(f"{name:20} {verdict}", flush=True)
