@@ -1,6 +1,6 @@
 """Find the bug (A2C on CartPole): these returns run without error, and A2C trains badly with
-them: the mean return stays mostly under 150, where the script's own solves CartPole (its curve beside
-the original's: docs/exercises.md). Find the mistake, fix it here, and confirm:
+them: the mean return stays mostly under 150, where the script's own solves CartPole (its
+curve beside the original's: docs/exercises.md). Find the mistake, fix it here, and confirm:
 
     python exercises/check.py bug_returns
 
