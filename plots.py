@@ -125,13 +125,18 @@ def draw_inside(run_dir, script, cfg, kept=None, maps=None):
     array}) per update (PPO-clip: ratios and advantages; A2C: V and its targets); `maps`:
     CartPole's maps (report.draw_inside)."""
     run_dir, plt = Path(run_dir), pyplot()
-    rows = 1 + (script == "ppo_cartpole") + (maps is not None)
+    evaluations = (read_csv(run_dir / "evaluations.csv")
+                   if (run_dir / "evaluations.csv").exists() else None)  # DDPG, TD3, SAC
+    entropy = evaluations is not None and "alpha" in evaluations  # SAC's temperature
+    rows = 1 + (script == "ppo_cartpole") + (maps is not None) + entropy
     height = 3.3 * rows  # inches; margins of half an inch above and below
     fig = plt.figure(figsize=(12, height))
     grid = fig.add_gridspec(rows, 4, hspace=0.55, wspace=0.45, left=0.06, right=0.97,
                             top=1 - 0.5 / height, bottom=0.55 / height)
-    if (run_dir / "evaluations.csv").exists():  # DDPG and TD3
-        overestimation(fig.add_subplot(grid[0, :]), read_csv(run_dir / "evaluations.csv"))
+    if evaluations is not None:
+        overestimation(fig.add_subplot(grid[0, :]), evaluations)
+        if entropy:
+            entropy_panels(fig, grid, evaluations)
     else:
         progress = read_csv(run_dir / "progress.csv")
         if script == "ppo_cartpole":
@@ -277,6 +282,23 @@ def overestimation(ax, evaluations):
                  "really obtained, over the same states", fontsize=9)
     ax.set_xlabel("env steps")
     ax.legend(fontsize=8)
+
+
+def entropy_panels(fig, grid, evaluations):
+    """SAC: the policy's entropy (-log pi at the last update's minibatch) against the target
+    the temperature steers it to, and alpha, at each evaluation."""
+    x = evaluations["global_step"]
+    ax = fig.add_subplot(grid[1, :2])
+    ax.plot(x, evaluations["entropy"], color="C2", lw=1.5, label="entropy: -mean log pi(a|s)")
+    ax.plot(x, evaluations["target_entropy"], color="k", ls="--", lw=0.8, label="its target")
+    ax.set_title("the policy's entropy (a minibatch's estimate) against its target", fontsize=9)
+    ax.set_xlabel("env steps")
+    ax.legend(fontsize=8)
+    ax = fig.add_subplot(grid[1, 2:])
+    ax.plot(x, evaluations["alpha"], color="C1", lw=1.5)
+    ax.set_yscale("log")
+    ax.set_title("alpha, the entropy's weight", fontsize=9)
+    ax.set_xlabel("env steps")
 
 
 # CSV column -> TensorBoard tag (CleanRL's names where CleanRL logs the same thing).

@@ -234,16 +234,16 @@ class EvaluationLog:
         """The next progress line's steps/s counts from here (not an evaluation or a write)."""
         self.timer.update(step=step, time=time.time())
 
-    def evaluation(self, step, returns, inside):
+    def evaluation(self, step, returns, inside, **columns):
         """An evaluation's row in evaluations.csv, with the critic's Q(s, mu(s)) against the
-        discounted return (`inside`: common.q_against_return's three numbers). Returns whether
-        it is the best so far."""
+        discounted return (`inside`: common.q_against_return's three numbers) and a script's
+        own `columns` (numbers) after them. Returns whether it is the best so far."""
         mean, std = float(np.mean(returns)), float(np.std(returns))
         best = mean > max((m for _, m, _ in self.evaluations), default=-float("inf"))
         self.evaluations.append((step, mean, std))
-        self.inside.append(inside)
+        self.inside.append((*inside, columns) if columns else inside)
         append_csv(self.dir / "evaluations.csv", evaluation_row(self.evaluations[-1],
-                                                                self.episodes, inside))
+                                                                self.episodes, self.inside[-1]))
         print(f"evaluation at step {step}: {mean:.1f} +- {std:.1f} over {len(returns)} "
               f"episodes", flush=True)
         return best
@@ -275,10 +275,11 @@ def episode_row(step, ep_return):
 
 def evaluation_row(evaluation, episodes, inside):
     """An evaluations.csv row: the evaluation, the training return before it, and the critic's
-    estimate against the return (`inside`: common.q_against_return's three numbers)."""
+    estimate against the return (`inside`: common.q_against_return's three numbers, then
+    perhaps a dict of the script's own columns)."""
     step, mean, std = evaluation
     done = [ret for s, ret in episodes if s <= step]
-    q, g, n = inside
+    q, g, n, *columns = inside
     return dict(global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
                 train_return_mean10=float(np.mean(done[-10:])) if done else float("nan"),
-                q_estimate=q, discounted_return=g, q_states=n)
+                q_estimate=q, discounted_return=g, q_states=n, **(columns[0] if columns else {}))

@@ -13,7 +13,7 @@ from conftest import ROOT
 
 TOOLS = ("common", "cli", "runlog", "checkpoints", "report", "plots")
 SCRIPTS = ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole", "ddpg_walker",
-           "td3_walker")
+           "td3_walker", "sac_walker")
 MODULES = TOOLS + SCRIPTS
 
 
@@ -57,7 +57,8 @@ print("same" if after == before else f"changed: {after[0]} {set(after[1].items()
 
 @pytest.mark.quick
 @pytest.mark.parametrize("order", [MODULES, MODULES[::-1], ("report", "ppo_cartpole", "common"),
-                                   ("ddpg_walker", "cli"), ("td3_walker",)])
+                                   ("ddpg_walker", "cli"), ("td3_walker",),
+                                   ("sac_walker",)])
 def test_importing_in_any_order_changes_nothing(order):
     """No import-order rule: whatever is imported first, SIGINT keeps Python's handler and
     the environment variables stay as they were (headless defaults are set where an env is
