@@ -20,6 +20,7 @@ import clip_or_penalty  # noqa: E402
 import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
+import sac_temperature  # noqa: E402
 import target_networks  # noqa: E402
 import td3_fixes  # noqa: E402
 import truncation_as_termination  # noqa: E402
@@ -310,3 +311,13 @@ def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
     q1, q2 = torch.tensor([5.0, 5.0]), torch.tensor([3.0, 9.0])
     assert td3_fixes.td_target_of_q1_alone(r, nd, q1, q2, 0.5).tolist() == [3.5, 2.0]
     assert td3_walker.td_target(r, nd, q1, q2, 0.5).tolist() == [2.5, 2.0]
+
+
+def test_sac_temperature_variants_are_only_the_alpha_flag():
+    """Learned (the script's default, alpha None) against --alpha 0.2, nothing else."""
+    import sac_walker
+
+    assert sac_walker.Config().alpha is None
+    assert [v.get("config", {}) for v in sac_temperature.VARIANTS.values()] == [
+        {}, {"alpha": 0.2}]
+    assert not any("swap" in v for v in sac_temperature.VARIANTS.values())
