@@ -45,6 +45,12 @@ CASES = {
         "--eval-every", "1000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
     "td3_walker_walker2d": ("td3_walker.py", [
         "--total-timesteps", "30000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
+    # SAC the same way: its long runs go on from a frozen commit too
+    "sac_walker_pendulum": ("sac_walker.py", [
+        "--env-id", "InvertedPendulum-v5", "--total-timesteps", "3000", "--start-steps", "1000",
+        "--eval-every", "1000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
+    "sac_walker_walker2d": ("sac_walker.py", [
+        "--total-timesteps", "30000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
 }
 
 

@@ -21,6 +21,7 @@ import clip_or_penalty  # noqa: E402
 import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
+import sac_temperature  # noqa: E402
 import target_networks  # noqa: E402
 import td3_fixes  # noqa: E402
 import truncation_as_termination  # noqa: E402
@@ -487,3 +488,13 @@ def test_td3_fixes_writes_every_evaluation_and_the_gap_after_its_runs_warm_up(tm
     table, gap = td3_fixes.more(curves, tmp_path, {"start_steps": 1000})
     assert table.read_text().splitlines()[1] == "DDPG: no fix,0,2500,100,5,3,2"  # gap: 5 - 3
     assert gap.stat().st_size > 0 and not list(tmp_path.glob("*.tmp*"))
+
+
+def test_sac_temperature_variants_are_only_the_alpha_flag():
+    """Learned (the script's default, alpha None) against --alpha 0.2, nothing else."""
+    import sac_walker
+
+    assert sac_walker.Config().alpha is None
+    assert [v.get("config", {}) for v in sac_temperature.VARIANTS.values()] == [
+        {}, {"alpha": 0.2}]
+    assert not any("swap" in v for v in sac_temperature.VARIANTS.values())

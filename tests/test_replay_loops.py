@@ -8,7 +8,8 @@ are stored. What this catches: s' stored as s (or s as s'), a truncation stored 
 the reset obs not taken after an episode ends, a field of one transition stored with another,
 a minibatch that is not stored transitions, a TD target from the online networks or without
 the termination mask, TD3's max for its min, unclipped smoothing noise, an actor or target
-that moves at every critic step.
+that moves at every critic step, SAC's target without its entropy term or from a target
+actor.
 """
 
 import copy
@@ -19,6 +20,7 @@ import torch
 
 import common
 import ddpg_walker as ddpg
+import sac_walker as sac
 import td3_walker as td3
 
 pytestmark = pytest.mark.quick
@@ -82,7 +84,8 @@ def record_training(script, monkeypatch, tmp_path, update_name, **overrides):
     return cfg, record, buffers[0], calls
 
 
-@pytest.mark.parametrize("script", [ddpg, td3], ids=["ddpg_walker", "td3_walker"])
+@pytest.mark.parametrize("script", [ddpg, td3, sac], ids=["ddpg_walker", "td3_walker",
+                                                           "sac_walker"])
 def test_every_stored_transition_is_what_the_env_returned(script, monkeypatch, tmp_path):
     update = "ddpg_update" if script is ddpg else "update_critics"
     _, record, buffer, _ = record_training(script, monkeypatch, tmp_path, update)
@@ -176,3 +179,34 @@ def test_td3_actor_and_targets_move_only_every_policy_delay_steps(monkeypatch, t
             moved = any(not torch.equal(p, q) for p, q in zip(
                 calls[k - 1]["nets"][name].parameters(), calls[k]["nets"][name].parameters()))
             assert moved == ((START + k) % 3 == 0), f"{name} before step {START + k + 1}"
+
+
+def test_sac_critics_fit_the_soft_target_of_the_current_policys_samples(monkeypatch, tmp_path):
+    """y = r + gamma (1 - terminated) (min(Q1', Q2')(s', a') - alpha log pi(a'|s')), a' drawn
+    from the current actor with the very random numbers the update drew, log pi from torch's
+    own tanh and affine transforms of the Gaussian (not the script's formula), alpha the
+    temperature before the update; with alpha fixed at 0.5 the entropy term is large here."""
+    from torch.distributions import AffineTransform, Normal, TanhTransform
+    from torch.distributions import TransformedDistribution
+
+    cfg, _, buffer, calls = record_training(sac, monkeypatch, tmp_path, "update_critics",
+                                            alpha=0.5)
+    assert len(calls) == TOTAL - START
+    for k, call in enumerate(calls):
+        check_minibatch(buffer, call["batch"], START + k + 1)
+        obs, action, reward, next_obs, not_done = call["batch"]
+        nets = call["nets"]
+        torch.set_rng_state(call["rng"])  # the very samples the update drew
+        with torch.no_grad():
+            base = nets["actor"].distribution(next_obs)
+            pi = TransformedDistribution(Normal(base.mean, base.stddev), [
+                TanhTransform(cache_size=1), AffineTransform(0.0, 3.0, cache_size=1)])
+            a = pi.rsample()  # InvertedPendulum's actions lie in [-3, 3]
+            logp = pi.log_prob(a).sum(-1)
+            q1, q2 = nets["critic_target"](next_obs, a), nets["critic2_target"](next_obs, a)
+            alpha = nets["temperature"]()
+            assert alpha.item() == pytest.approx(0.5)
+            y = reward + cfg.gamma * not_done * (torch.minimum(q1, q2) - alpha * logp)
+            expected = (((nets["critic"](obs, action) - y) ** 2).mean()
+                        + ((nets["critic2"](obs, action) - y) ** 2).mean())
+        assert call["out"].item() == pytest.approx(expected.item(), rel=1e-5), k
