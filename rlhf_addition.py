@@ -45,7 +45,7 @@ import cli
 import common
 import plots
 import runlog
-from grpo_addition import (TinyGPT, answer_of, completion_mask, decode, encode, prompt_of,
+from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
                            sample, split_pairs, token_logp)
 
 SCRIPT = "rlhf_addition"  # names its run folders; saved in its models (it loads no other's)
@@ -75,8 +75,8 @@ class Config(cli.OutputFlags):
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 2
     """digits of each number to add (2: 47+38=085.)"""
-    label_noise: float = 0.5
-    """share of the supervised labels whose carry out of the ones digit is dropped"""
+    label_noise: float = 0.3
+    """share of the supervised labels whose carry out of the ones digit is wrong (label_of)"""
     n_layer: int = 2
     """transformer blocks (policy, reward model and value network alike)"""
     d_model: int = 64
@@ -90,23 +90,24 @@ class Config(cli.OutputFlags):
     sft_lr: float = 1e-3
     """Adam step size of the supervised phase"""
     # --- preferences and the reward model ---
-    pair_prompts: int = 1000
+    pair_prompts: int = 3000
     """training prompts whose answers the judge ranks"""
     answers_per_prompt: int = 4
     """K answers ranked per prompt, giving up to K(K-1)/2 pairs (InstructGPT: 4 to 9)"""
     flip: float = 0.2
     """share of the pairs whose label is flipped (InstructGPT's labellers agreed ~73%)"""
-    rm_epochs: int = 2
-    """passes of the reward model over the pairs (InstructGPT: 1; more overfits)"""
+    rm_epochs: int = 4
+    """passes of the reward model over the pairs (InstructGPT: 1; here the carry is learned
+    late: held-out pair accuracy about 0.6 after 2 passes, 0.9 after 4)"""
     rm_batch: int = 64
     """pairs per reward-model (and DPO) step"""
-    rm_lr: float = 3e-4
+    rm_lr: float = 1e-3
     """Adam step size of the reward model"""
     # --- PPO ---
     reward_from: str = "model"
     """'model': PPO's reward is the reward model's score (RLHF); 'judge': the hidden score
     itself, as a verifier would give it (what a perfect reward model would do)"""
-    ppo_steps: int = 60
+    ppo_steps: int = 50
     """PPO updates, each on a fresh batch of prompts"""
     ppo_prompts: int = 256
     """prompts per PPO update, one sampled answer each"""
@@ -114,7 +115,7 @@ class Config(cli.OutputFlags):
     """passes over each batch (ppo_cartpole.py: 10; Stiennon et al.: 4)"""
     num_minibatches: int = 4
     """minibatches per epoch"""
-    learning_rate: float = 5e-5
+    learning_rate: float = 2e-5
     """Adam step size of PPO, policy and value network"""
     clip_coef: float = 0.2
     """epsilon of the per-token clipped ratio, as in PPO-clip"""
@@ -167,13 +168,21 @@ class Config(cli.OutputFlags):
                   "has none: --eval prints the saved models' answers")
 
 
-# ==== The judge and its preference pairs ==================================================
+# ==== The task's labels, the judge and its preference pairs ===============================
+
+
+def label_of(a, b, digits, wrong=False):
+    """A supervised label: the sum, or with `wrong` its carry out of the ones digit wrong:
+    dropped where there is one, added where there is none (47+38=075., 41+38=089.). Wrong
+    both ways, so that "a larger tens digit" is no shortcut to the right answer."""
+    carry = 10 if a % 10 + b % 10 >= 10 else -10
+    return f"{a + b - (carry if wrong else 0):0{digits + 1}d}."
 
 
 def true_score(a, b, completion, digits):
     """The hidden judge: the share of the right answer's characters that `completion` (cut
     after its first ".") has in place; 1.0 for the right sum. The policy never sees it."""
-    right, answer = answer_of(a, b, digits), completion.split(".")[0] + "."
+    right, answer = label_of(a, b, digits), completion.split(".")[0] + "."
     return sum(x == y for x, y in zip(answer, right)) / len(right)
 
 
@@ -334,9 +343,9 @@ def train(cfg: Config):
         opt, start = torch.optim.Adam(policy.parameters(), lr=cfg.sft_lr), time.time()
         for step in range(1, cfg.sft_steps + 1):
             picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
-            noisy = rng.random(cfg.sft_batch) < cfg.label_noise  # the carry dropped
+            noisy = rng.random(cfg.sft_batch) < cfg.label_noise  # the carry wrong
             loss = sft_loss(policy, torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)
-                            + answer_of(*train_pairs[i], cfg.digits, drop)) for i, drop in
+                            + label_of(*train_pairs[i], cfg.digits, wrong)) for i, wrong in
                             zip(picks, noisy)]), P)
             opt.zero_grad()
             loss.backward()
