@@ -46,7 +46,7 @@ import common
 import plots
 import runlog
 from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
-                           sample, split_pairs, token_logp)
+                           sample, sft_loss, split_pairs, token_logp)
 
 SCRIPT = "rlhf_addition"  # names its run folders; saved in its models (it loads no other's)
 
@@ -279,10 +279,13 @@ def ppo_token_loss(policy, value_net, mb, clip_coef):
     return loss_pi, loss_v, clipfrac
 
 
-def sft_loss(model, seqs, P):
-    """Cross-entropy of the answer tokens given the prompt (the prompt itself is not learned)."""
-    logits = model(seqs[:, :-1])[:, P - 1:]
-    return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), seqs[:, P:].reshape(-1))
+def supervised_batch(train_pairs, cfg, rng):
+    """sft_batch prompts + labels, the carry wrong in label_noise of them, (B, P + L)."""
+    picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
+    noisy = rng.random(cfg.sft_batch) < cfg.label_noise  # the carry wrong
+    return torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)
+                                + label_of(*train_pairs[i], cfg.digits, wrong))
+                         for i, wrong in zip(picks, noisy)])
 
 
 @torch.no_grad()
@@ -296,6 +299,36 @@ def evaluate(model, pairs, cfg, n=None):
     seqs = sample(model, prompts.repeat_interleave(cfg.eval_samples, 0), cfg.digits + 2, gen)
     scores = scores_of(seqs, cfg.digits)
     return scores.mean().item(), (scores == 1).float().mean().item()
+
+
+def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
+    """`epochs` passes of Adam over the pairs, shuffled, `batch` at a time: the reward model's
+    Bradley-Terry loss and DPO's both take (chosen, rejected) pairs. pair_loss(idx) -> the
+    loss of pairs idx; after_step(step, loss) logs."""
+    opt, step = torch.optim.Adam(model.parameters(), lr=lr), 0
+    for epoch in range(epochs):
+        for idx in torch.randperm(n_pairs, generator=gen).split(batch):
+            loss = pair_loss(idx)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            step += 1
+            after_step(step, loss)
+
+
+def ppo_update(policy, value_net, opt, data, cfg, gen):
+    """update_epochs passes of shuffled minibatches of answers over one batch `data`, as in
+    ppo_cartpole.py's ppo_update. Returns the last minibatch's (loss_pi, loss_v, clipfrac)."""
+    for epoch in range(cfg.update_epochs):
+        for mb_inds in torch.randperm(len(data["seqs"]), generator=gen).tensor_split(
+                cfg.num_minibatches):
+            mb = dict({k: x[mb_inds] for k, x in data.items() if k != "P"}, P=data["P"])
+            loss_pi, loss_v, clipfrac = ppo_token_loss(policy, value_net, mb, cfg.clip_coef)
+            loss = loss_pi + cfg.vf_coef * loss_v  # L_CLIP - c1 L_VF, minimized (eq. 9)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+    return loss_pi, loss_v, clipfrac
 
 
 def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
@@ -342,16 +375,12 @@ def train(cfg: Config):
         # --- 1. supervised phase: imitate the labels, wrong ones included ---
         opt, start = torch.optim.Adam(policy.parameters(), lr=cfg.sft_lr), time.time()
         for step in range(1, cfg.sft_steps + 1):
-            picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
-            noisy = rng.random(cfg.sft_batch) < cfg.label_noise  # the carry wrong
-            loss = sft_loss(policy, torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)
-                            + label_of(*train_pairs[i], cfg.digits, wrong)) for i, wrong in
-                            zip(picks, noisy)]), P)
+            loss = sft_loss(policy, supervised_batch(train_pairs, cfg, rng), P)
             opt.zero_grad()
             loss.backward()
             opt.step()
-            log_row(run, held_out, cfg, "sft", check=policy if step % (20 * cfg.eval_every) == 0 else None,
-                loss=loss.item())
+            log_row(run, held_out, cfg, "sft", loss=loss.item(),
+                    check=policy if step % (20 * cfg.eval_every) == 0 else None)
         reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
         stage_done(result, "supervised", policy, held_out, cfg, start)
 
@@ -367,15 +396,10 @@ def train(cfg: Config):
 
         # --- 3. the reward model: r(x, y_w) above r(x, y_l), Bradley-Terry ---
         rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model).requires_grad_(True)
-        opt = torch.optim.Adam(rm.parameters(), lr=cfg.rm_lr)
-        for epoch in range(cfg.rm_epochs):
-            for idx in torch.randperm(len(chosen), generator=gen).split(cfg.rm_batch):
-                loss = bradley_terry_loss(sequence_score(rm, chosen[idx], P),
-                                          sequence_score(rm, rejected[idx], P))
-                opt.zero_grad()
-                loss.backward()
-                opt.step()
-                log_row(run, held_out, cfg, "rm", loss=loss.item())
+        fit_on_pairs(rm, lambda idx: bradley_terry_loss(sequence_score(rm, chosen[idx], P),
+                                                        sequence_score(rm, rejected[idx], P)),
+                     len(chosen), cfg.rm_epochs, cfg.rm_lr, cfg.rm_batch, gen,
+                     lambda step, loss: log_row(run, held_out, cfg, "rm", loss=loss.item()))
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             result["rm_accuracy"] = (sequence_score(rm, test_w, P) > sequence_score(rm, test_l, P)
                                      ).float().mean().item()
@@ -405,19 +429,10 @@ def train(cfg: Config):
                 adv, ret = token_advantages(rewards, values, mask, cfg.gamma, cfg.lam)
                 real = adv[mask > 0]
                 adv = (adv - real.mean()) / (real.std() + 1e-8) * mask  # ppo_cartpole's norm_adv
-            data = dict(seqs=seqs, logp=logp_old, adv=adv, ret=ret, mask=mask)
-            for epoch in range(cfg.update_epochs):
-                for mb_inds in torch.randperm(len(seqs), generator=gen).tensor_split(
-                        cfg.num_minibatches):
-                    mb = dict({k: x[mb_inds] for k, x in data.items()}, P=P)
-                    loss_pi, loss_v, clipfrac = ppo_token_loss(policy, value_net, mb,
-                                                               cfg.clip_coef)
-                    loss = loss_pi + cfg.vf_coef * loss_v  # L_CLIP - c1 L_VF, minimized
-                    opt.zero_grad()
-                    loss.backward()
-                    opt.step()
-            log_row(run, held_out, cfg, "ppo", check=policy if step % cfg.eval_every == 0 else None,
-                    loss=loss_pi.item(), rm_score=learned.mean().item(), true_score=truth.mean()
+            data = dict(seqs=seqs, logp=logp_old, adv=adv, ret=ret, mask=mask, P=P)
+            loss_pi, loss_v, clipfrac = ppo_update(policy, value_net, opt, data, cfg, gen)
+            log_row(run, held_out, cfg, "ppo", check=policy if step % cfg.eval_every == 0
+                    else None, loss=loss_pi.item(), rm_score=learned.mean().item(), true_score=truth.mean()
                     .item(), kl=kl.sum(1).mean().item(), loss_v=loss_v.item(),
                     clipfrac=clipfrac.item())
         stage_done(result, "PPO", policy, held_out, cfg, start)
@@ -425,32 +440,26 @@ def train(cfg: Config):
         # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
         if cfg.dpo:
             dpo_policy = nets["dpo"] = copy.deepcopy(reference).requires_grad_(True)
-            opt = torch.optim.Adam(dpo_policy.parameters(), lr=cfg.dpo_lr)
-            start, step = time.time(), 0
-            with torch.no_grad():
+            start = time.time()
+            with torch.no_grad():  # log pi_ref(y|x) of every pair's answers, once
                 ref_w, ref_l = answer_logp(reference, chosen, P), answer_logp(reference, rejected, P)
-            for epoch in range(cfg.dpo_epochs):
-                for idx in torch.randperm(len(chosen), generator=gen).split(cfg.rm_batch):
-                    loss = dpo_loss(answer_logp(dpo_policy, chosen[idx], P),
-                                    answer_logp(dpo_policy, rejected[idx], P), ref_w[idx],
-                                    ref_l[idx], cfg.dpo_beta)
-                    opt.zero_grad()
-                    loss.backward()
-                    opt.step()
-                    step += 1
-                    log_row(run, held_out, cfg, "dpo", loss=loss.item(),
-                            check=dpo_policy if step % cfg.eval_every == 0 else None)
+            fit_on_pairs(dpo_policy, lambda idx: dpo_loss(
+                answer_logp(dpo_policy, chosen[idx], P), answer_logp(dpo_policy, rejected[idx], P),
+                ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
+                cfg.rm_batch, gen, lambda step, loss: log_row(
+                    run, held_out, cfg, "dpo", loss=loss.item(),
+                    check=dpo_policy if step % cfg.eval_every == 0 else None))
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
     if not run.interrupted and cfg.curves:
         with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            draw(run.dir, cfg, rm, test_w, test_l, P)
+            draw(run.dir, rm, test_w, test_l, P)
     return dict(result, interrupted=run.interrupted)
 
 
 # ==== Pictures, --eval ====================================================================
 
 
-def draw(run_dir, cfg, rm, test_w, test_l, P):
+def draw(run_dir, rm, test_w, test_l, P):
     """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
     of the held-out pairs' chosen and rejected answers, and the over-optimisation picture:
     learned reward and true score of PPO's samples against the KL to the supervised model."""
@@ -459,14 +468,12 @@ def draw(run_dir, cfg, rm, test_w, test_l, P):
     phase = np.array([r.pop("phase") for r in rows])  # the other columns are numbers
     plt, log = plots.pyplot(), {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
     fig, axes = plt.subplots(1, 4, figsize=(15, 3.5))
-    for ax, name, columns in zip(axes, ("sft", "rm", "ppo", "dpo"), (
-            ("loss", "held_true", "held_accuracy"), ("loss",), ("rm_score", "true_score", "kl",
-                                                                "held_true", "held_accuracy"),
-            ("loss", "held_true", "held_accuracy"))):
-        for key in columns:
+    for ax, name in zip(axes, ("sft", "rm", "ppo", "dpo")):
+        for key in ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy"):
             keep = (phase == name) & np.isfinite(log[key])
-            ax.plot(log["global_step"][keep], log[key][keep], lw=1,
-                    marker="o" if key.startswith("held") else None, ms=3, label=key)
+            if keep.any():
+                ax.plot(log["global_step"][keep], log[key][keep], lw=1, ms=3, label=key,
+                        marker="o" if key.startswith("held") else None)
         ax.set(title=name, xlabel="step")
         ax.legend(fontsize=7)
     plots.save_whole(plt, fig, run_dir / "curve.png", dpi=80)
@@ -475,13 +482,12 @@ def draw(run_dir, cfg, rm, test_w, test_l, P):
         for seqs, label in ((test_w, "chosen (higher true score)"), (test_l, "rejected")):
             left.hist(sequence_score(rm, seqs, P).numpy(), bins=40, alpha=0.6, label=label)
     left.set(title="reward model on held-out pairs", xlabel="r(x, y)")
-    ppo = (phase == "ppo")
     for key in ("rm_score", "true_score"):
-        right.plot(np.sqrt(np.maximum(log["kl"][ppo], 0)), log[key][ppo], ".-", ms=3, label=key)
-    right.set(title="PPO: rewards against the KL to the supervised model",
+        right.plot(np.sqrt(np.maximum(log["kl"][phase == "ppo"], 0)), log[key][phase == "ppo"],
+                   ".-", ms=3, label=key)
+    right.set(title="PPO's answers against their KL to the supervised model",
               xlabel="sqrt(KL(pi || pi_ref)), per answer")
-    for ax in (left, right):
-        ax.legend(fontsize=7)
+    left.legend(fontsize=7), right.legend(fontsize=7)
     plots.save_whole(plt, fig, run_dir / "inside.png", dpi=80)
     print(f"curve: {run_dir / 'curve.png'}\ninside: {run_dir / 'inside.png'}", flush=True)
 
@@ -500,20 +506,18 @@ def main(argv=None):
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
         c = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
-        for key in ("policy", "dpo"):
-            if key in saved:
-                model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
-                    c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
-                gen, P = torch.Generator().manual_seed(c.eval_seed), 2 * c.digits + 2
-                for a, b in held_out[:6]:
-                    seqs = sample(model, torch.tensor([encode(prompt_of(a, b, c.digits))] * 6),
-                                  c.digits + 2, gen)
-                    print(f"{key:6} {prompt_of(a, b, c.digits)} " + " ".join(
-                        f"{decode(s[P:])}({true_score(a, b, decode(s[P:]), c.digits):.2f})"
-                        for s in seqs.tolist()), flush=True)
-                score, accuracy = evaluate(model, held_out, c)
-                print(f"{key}: held-out ({len(held_out)} prompts) true score {score:.3f}, "
-                      f"accuracy {accuracy:.3f}  ((n): the judge's hidden score)", flush=True)
+        P, gen = 2 * c.digits + 2, torch.Generator().manual_seed(c.eval_seed)
+        prompts = torch.tensor([encode(prompt_of(a, b, c.digits)) for a, b in held_out[:6]])
+        for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
+            model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
+                c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
+            seqs = sample(model, prompts.repeat_interleave(6, 0), c.digits + 2, gen)
+            for row, score in zip(seqs.view(6, 6, -1).tolist(), scores_of(seqs, c.digits).view(6, 6)):
+                print(f"{key:6} {decode(row[0][:P])} " + " ".join(
+                    f"{decode(s[P:])}({v:.2f})" for s, v in zip(row, score.tolist())))
+            score, accuracy = evaluate(model, held_out, c)
+            print(f"{key}: held-out ({len(held_out)} prompts) true score {score:.3f}, "
+                  f"accuracy {accuracy:.3f}  ((n): the judge's hidden score)", flush=True)
 
 
 if __name__ == "__main__":

@@ -19,14 +19,17 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py",
-           "td3_walker.py", "grpo_addition.py")
+           "td3_walker.py", "grpo_addition.py", "rlhf_addition.py")
 ALGORITHM_DEFS = ("layer_init", "PolicyNetwork", "ValueNetwork", "ActorCritic", "Actor", "Critic",
                   "RolloutBuffer", "ReplayBuffer", "compute_loss_pi", "compute_loss_v", "approx_kl",
                   "adapt_beta", "ppo_update", "a2c_targets", "a2c_loss", "soft_update", "td_target",
                   "compute_loss_actor", "ddpg_update", "build", "update_critics",
                   "update_actor_and_targets", "encode", "decode", "Block", "TinyGPT", "prompt_of",
                   "answer_of", "reward", "split_pairs", "sample", "completion_mask", "token_logp",
-                  "group_advantages", "grpo_loss", "sft_loss", "evaluate")
+                  "group_advantages", "grpo_loss", "sft_loss", "evaluate", "with_scalar_head",
+                  "label_of", "true_score", "scores_of", "preference_pairs", "sequence_score",
+                  "bradley_terry_loss", "answer_logp", "dpo_loss", "per_token_rewards",
+                  "token_advantages", "ppo_token_loss", "fit_on_pairs", "supervised_batch")
 # In train(), a statement is plumbing when it calls the run's log or plumbing (a compound one:
 # when its first line does, and then all it holds); comment lines that name them are too.
 PLUMBING_IN_TRAIN = re.compile(r"\b(run|ctrl_c|in_checkpoint)\b|\b(runlog|report|checkpoints|cli)\."
