@@ -9,6 +9,7 @@ draw docs/rlhf_overoptimisation.png (--plot).
 
     nice -n 10 python benchmarks/rlhf_seeds.py           # about 5 minutes a run on 2 busy cores
     python benchmarks/rlhf_seeds.py --plot               # the figure, from the records
+    python benchmarks/rlhf_seeds.py --table              # the page's table, from the record
 """
 
 import csv
@@ -25,9 +26,9 @@ CURVES = ROOT / "benchmarks" / "results" / "rlhf_overopt.csv"
 FIGURE = ROOT / "docs" / "rlhf_overoptimisation.png"
 # (seed, name, flags): the default run, seed 0 with a tight KL penalty, and with the judge's
 # own score as PPO's reward (a verifier: what a perfect reward model would give)
-RUNS = [(0, "default", []), (1, "default", []), (2, "default", []),
-        (0, "beta 1", ["--beta", "1"]), (0, "judge", ["--reward-from", "judge"]),
-        (3, "default", []), (4, "default", [])]
+RUNS = [(0, "default", []), (0, "beta 1", ["--beta", "1"]), (1, "default", []),
+        (2, "default", []), (0, "judge", ["--reward-from", "judge"]), (3, "default", []),
+        (4, "default", [])]
 STAGE = re.compile(r"^(supervised|PPO|DPO): held-out true score ([\d.]+), accuracy ([\d.]+) "
                    r"\(took (\d+) s\)")
 
@@ -67,6 +68,21 @@ def append(path, rows):
         writer.writerows(rows)
 
 
+def summary(path=OUT):
+    """The page's table, from the record: per stage, the held-out true score and accuracy of
+    the default runs, median [lowest, highest] over their seeds; and the seeds."""
+    import statistics
+
+    rows = [r for r in csv.DictReader(open(path)) if r["run"] == "default"]
+    cells = []
+    for stage in ("supervised", "ppo", "dpo"):
+        cells.append([f"{statistics.median(v):.3f} [{min(v):.3f}, {max(v):.3f}]" for v in (
+            [float(r[f"{stage}_{k}"]) for r in rows] for k in ("true", "accuracy"))])
+    v = [float(r["rm_pair_accuracy"]) for r in rows]
+    cells.append([f"{statistics.median(v):.3f} [{min(v):.3f}, {max(v):.3f}]"])
+    return cells, sorted(int(r["seed"]) for r in rows)
+
+
 def plot():
     """docs/rlhf_overoptimisation.png: learned reward and true score of PPO's samples against
     sqrt(KL to the supervised model), seed 0 at beta 0.1 (default) and at beta 1."""
@@ -99,6 +115,9 @@ def plot():
 def main():
     if "--plot" in sys.argv:
         return plot()
+    if "--table" in sys.argv:
+        cells, seeds = summary()
+        return print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))
     done = {(r["seed"], r["run"]) for r in csv.DictReader(open(OUT))} if OUT.exists() else set()
     with tempfile.TemporaryDirectory() as tmp:
         for seed, name, flags in RUNS:

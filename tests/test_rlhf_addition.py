@@ -77,7 +77,7 @@ def test_token_advantages_against_a_brute_force_sum(gamma, lam):
     rewards, values = torch.randn(4, 6, generator=g), torch.randn(4, 6, generator=g)
     lengths = [6, 3, 1, 4]
     mask = torch.tensor([[1.0] * n + [0.0] * (6 - n) for n in lengths])
-    rewards, values = rewards * mask, values * mask
+    rewards = rewards * mask  # values after the end are left as they come: they must not count
     adv, ret = rlhf.token_advantages(rewards, values, mask, gamma, lam)
     for i, n in enumerate(lengths):
         v = values[i, :n].tolist() + [0.0]
