@@ -83,6 +83,15 @@ def summary(path=OUT):
     return cells, sorted(int(r["seed"]) for r in rows)
 
 
+def overopt(name, path=CURVES):
+    """Seed 0's PPO run `name`: (learned reward, true score, KL) of the sampled answers,
+    each the mean of the first 5 steps and of the last 5, as the page writes them."""
+    rows = [r for r in csv.DictReader(open(path)) if r["run"] == name and r["seed"] == "0"]
+    mean = lambda part, key: sum(float(r[key]) for r in part) / len(part)  # noqa: E731
+    return [(f"{mean(rows[:5], k):{f}}", f"{mean(rows[-5:], k):{f}}")
+            for k, f in (("rm_score", "+.2f"), ("true_score", ".3f"), ("kl", ".2f"))]
+
+
 def plot():
     """docs/rlhf_overoptimisation.png: learned reward and true score of PPO's samples against
     sqrt(KL to the supervised model), seed 0 at beta 0.1 (default) and at beta 1."""
@@ -117,7 +126,8 @@ def main():
         return plot()
     if "--table" in sys.argv:
         cells, seeds = summary()
-        return print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))
+        print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))
+        return print("\n".join(f"{n}: {overopt(n)}" for n in ("default", "beta 1", "judge")))
     done = {(r["seed"], r["run"]) for r in csv.DictReader(open(OUT))} if OUT.exists() else set()
     with tempfile.TemporaryDirectory() as tmp:
         for seed, name, flags in RUNS:

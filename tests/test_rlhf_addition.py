@@ -180,3 +180,26 @@ def test_ctrl_c_keeps_the_model(tmp_path):
     (run,) = tmp_path.iterdir()
     assert (run / "model.pt").exists() and not list(run.glob("*.tmp*"))
     assert "model.pt as training left it" in out
+
+
+def test_the_pages_numbers_are_the_records():
+    """docs/ppo_to_rlhf.md and its Chinese page show the medians and ranges that
+    benchmarks/rlhf_seeds.py computes from benchmarks/results/rlhf_seeds.csv, row by row, the
+    seeds they cover, and the over-optimisation numbers of rlhf_overopt.csv."""
+    import importlib.util
+    import re
+
+    from conftest import ROOT
+
+    spec = importlib.util.spec_from_file_location("rlhf_seeds", ROOT / "benchmarks" / "rlhf_seeds.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    cells, seeds = bench.summary()
+    for page in ("ppo_to_rlhf.md", "ppo_to_rlhf.zh-CN.md"):
+        text = (ROOT / "docs" / page).read_text(encoding="utf-8")
+        rows = [line for line in text.splitlines() if line.startswith("| ") and " [" in line]
+        assert [re.findall(r"[\d.]+ \[[\d.]+, [\d.]+\]", row) for row in rows] == cells, page
+        assert f"seeds {', '.join(map(str, seeds))}" in text.replace("种子 ", "seeds "), page
+        for name in ("default", "beta 1"):
+            for first, last in bench.overopt(name):
+                assert f"{first} → {last}" in text, (page, name, first, last)
