@@ -208,7 +208,8 @@ def preference_pairs(seqs, scores, K, flip, rng):
                     rejected.append(l)
     chosen, rejected = torch.tensor(chosen), torch.tensor(rejected)
     flipped = torch.as_tensor(rng.random(len(chosen)) < flip)
-    chosen, rejected = torch.where(flipped, rejected, chosen), torch.where(flipped, chosen, rejected)
+    chosen, rejected = (torch.where(flipped, rejected, chosen),
+                        torch.where(flipped, chosen, rejected))
     return seqs[chosen], seqs[rejected], ~flipped
 
 
@@ -234,8 +235,10 @@ def answer_logp(model, seqs, P):
 
 
 def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
-    """L_DPO = -E[log sigmoid(beta log(pi(y_w|x)/pi_ref(y_w|x)) - beta log(pi(y_l|x)/pi_ref(y_l|x)))]
-    (Rafailov et al. 2023, eq. 7): Bradley-Terry with beta log(pi/pi_ref) as the reward."""
+    """L_DPO = -E[log sigmoid(beta log(pi(y_w|x) / pi_ref(y_w|x))
+                             - beta log(pi(y_l|x) / pi_ref(y_l|x)))]
+    (Rafailov et al. 2023, eq. 7): Bradley-Terry with beta log(pi / pi_ref) of the whole answer
+    as the reward."""
     return -F.logsigmoid(beta * ((logp_w - ref_w) - (logp_l - ref_l))).mean()
 
 
@@ -384,22 +387,21 @@ def train(cfg: Config):
         reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
         stage_done(result, "supervised", policy, held_out, cfg, start)
 
-        # --- 2. the judge ranks K answers of the supervised model to each prompt ---
+        # --- 2. the judge ranks K answers to each prompt (held out: its true order, no flips) ---
         start = time.time()
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
         chosen, rejected, _ = preference_pairs(seqs, scores_of(seqs, cfg.digits), K, cfg.flip, rng)
         test_prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in held_out])
-        test = sample(reference, test_prompts.repeat_interleave(K, 0), L, gen)
-        test_w, test_l, test_right = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0,
-                                                      rng)  # held out: the judge's true order
+        test = sample(reference, test_prompts.repeat_interleave(K, 0), L, gen)  # true order
+        test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
 
         # --- 3. the reward model: r(x, y_w) above r(x, y_l), Bradley-Terry ---
         rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model).requires_grad_(True)
+        logged = lambda step, loss: log_row(run, held_out, cfg, "rm", loss=loss.item())  # noqa
         fit_on_pairs(rm, lambda idx: bradley_terry_loss(sequence_score(rm, chosen[idx], P),
                                                         sequence_score(rm, rejected[idx], P)),
-                     len(chosen), cfg.rm_epochs, cfg.rm_lr, cfg.rm_batch, gen,
-                     lambda step, loss: log_row(run, held_out, cfg, "rm", loss=loss.item()))
+                     len(chosen), cfg.rm_epochs, cfg.rm_lr, cfg.rm_batch, gen, logged)
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             result["rm_accuracy"] = (sequence_score(rm, test_w, P) > sequence_score(rm, test_l, P)
                                      ).float().mean().item()
@@ -431,24 +433,25 @@ def train(cfg: Config):
                 adv = (adv - real.mean()) / (real.std() + 1e-8) * mask  # ppo_cartpole's norm_adv
             data = dict(seqs=seqs, logp=logp_old, adv=adv, ret=ret, mask=mask, P=P)
             loss_pi, loss_v, clipfrac = ppo_update(policy, value_net, opt, data, cfg, gen)
-            log_row(run, held_out, cfg, "ppo", check=policy if step % cfg.eval_every == 0
-                    else None, loss=loss_pi.item(), rm_score=learned.mean().item(), true_score=truth.mean()
-                    .item(), kl=kl.sum(1).mean().item(), loss_v=loss_v.item(),
-                    clipfrac=clipfrac.item())
+            log_row(run, held_out, cfg, "ppo", check=None if step % cfg.eval_every else policy,
+                    loss=loss_pi.item(), rm_score=learned.mean().item(),
+                    true_score=truth.mean().item(), kl=kl.sum(1).mean().item(),
+                    loss_v=loss_v.item(), clipfrac=clipfrac.item())
         stage_done(result, "PPO", policy, held_out, cfg, start)
 
         # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
         if cfg.dpo:
-            dpo_policy = nets["dpo"] = copy.deepcopy(reference).requires_grad_(True)
-            start = time.time()
+            dpo_policy, start = copy.deepcopy(reference).requires_grad_(True), time.time()
+            nets["dpo"] = dpo_policy
             with torch.no_grad():  # log pi_ref(y|x) of every pair's answers, once
-                ref_w, ref_l = answer_logp(reference, chosen, P), answer_logp(reference, rejected, P)
+                ref_w = answer_logp(reference, chosen, P)
+                ref_l = answer_logp(reference, rejected, P)
+            logged = lambda step, loss: log_row(run, held_out, cfg, "dpo", loss=loss.item(),  # noqa
+                                                check=None if step % cfg.eval_every else dpo_policy)
             fit_on_pairs(dpo_policy, lambda idx: dpo_loss(
                 answer_logp(dpo_policy, chosen[idx], P), answer_logp(dpo_policy, rejected[idx], P),
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
-                cfg.rm_batch, gen, lambda step, loss: log_row(
-                    run, held_out, cfg, "dpo", loss=loss.item(),
-                    check=dpo_policy if step % cfg.eval_every == 0 else None))
+                cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
     if not run.interrupted and cfg.curves:
         with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
@@ -512,7 +515,8 @@ def main(argv=None):
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
                 c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
             seqs = sample(model, prompts.repeat_interleave(6, 0), c.digits + 2, gen)
-            for row, score in zip(seqs.view(6, 6, -1).tolist(), scores_of(seqs, c.digits).view(6, 6)):
+            scores = scores_of(seqs, c.digits).view(6, 6)
+            for row, score in zip(seqs.view(6, 6, -1).tolist(), scores):
                 print(f"{key:6} {decode(row[0][:P])} " + " ".join(
                     f"{decode(s[P:])}({v:.2f})" for s, v in zip(row, score.tolist())))
             score, accuracy = evaluate(model, held_out, c)
