@@ -92,6 +92,10 @@ def overopt(name, path=CURVES):
             for k, f in (("rm_score", "+.2f"), ("true_score", ".3f"), ("kl", ".2f"))]
 
 
+def overopt_has(name, path=CURVES):
+    return any(r["run"] == name for r in csv.DictReader(open(path)))
+
+
 def plot():
     """docs/rlhf_overoptimisation.png: learned reward and true score of PPO's samples against
     sqrt(KL to the supervised model), seed 0 at beta 0.1 (default) and at beta 1."""
@@ -127,7 +131,7 @@ def main():
     if "--table" in sys.argv:
         cells, seeds = summary()
         print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))
-        return print("\n".join(f"{n}: {overopt(n)}" for n in ("default", "beta 1", "judge")))
+        return print("\n".join(f"{n}: {overopt(n)}" for n in ("default", "beta 1", "judge") if overopt_has(n)))
     done = {(r["seed"], r["run"]) for r in csv.DictReader(open(OUT))} if OUT.exists() else set()
     with tempfile.TemporaryDirectory() as tmp:
         for seed, name, flags in RUNS:
