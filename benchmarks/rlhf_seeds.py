@@ -78,6 +78,10 @@ def summary(path=OUT):
     for stage in ("supervised", "ppo", "dpo"):
         cells.append([f"{statistics.median(v):.3f} [{min(v):.3f}, {max(v):.3f}]" for v in (
             [float(r[f"{stage}_{k}"]) for r in rows] for k in ("true", "accuracy"))])
+    for stage in ("ppo", "dpo"):  # paired: each seed's stage minus its own supervised model
+        cells.append([f"{statistics.median(v):+.3f} [{min(v):+.3f}, {max(v):+.3f}]" for v in (
+            [float(r[f"{stage}_{k}"]) - float(r[f"supervised_{k}"]) for r in rows]
+            for k in ("true", "accuracy"))])
     v = [float(r["rm_pair_accuracy"]) for r in rows]
     cells.append([f"{statistics.median(v):.3f} [{min(v):.3f}, {max(v):.3f}]"])
     return cells, sorted(int(r["seed"]) for r in rows)

@@ -191,14 +191,16 @@ def test_the_pages_numbers_are_the_records():
 
     from conftest import ROOT
 
-    spec = importlib.util.spec_from_file_location("rlhf_seeds", ROOT / "benchmarks" / "rlhf_seeds.py")
+    spec = importlib.util.spec_from_file_location("rlhf_seeds",
+                                                  ROOT / "benchmarks" / "rlhf_seeds.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
     cells, seeds = bench.summary()
     for page in ("ppo_to_rlhf.md", "ppo_to_rlhf.zh-CN.md"):
         text = (ROOT / "docs" / page).read_text(encoding="utf-8")
         rows = [line for line in text.splitlines() if line.startswith("| ") and " [" in line]
-        assert [re.findall(r"[\d.]+ \[[\d.]+, [\d.]+\]", row) for row in rows] == cells, page
+        cell = r"[+-]?[\d.]+ \[[+-]?[\d.]+, [+-]?[\d.]+\]"  # median [lowest, highest]
+        assert [re.findall(cell, row) for row in rows] == cells, page
         assert f"seeds {', '.join(map(str, seeds))}" in text.replace("种子 ", "seeds "), page
         for name in ("default", "beta 1"):
             for first, last in bench.overopt(name):
