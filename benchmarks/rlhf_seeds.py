@@ -135,7 +135,8 @@ def main():
     if "--table" in sys.argv:
         cells, seeds = summary()
         print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))
-        return print("\n".join(f"{n}: {overopt(n)}" for n in ("default", "beta 1", "judge") if overopt_has(n)))
+        names = [n for n in ("default", "beta 1", "judge") if overopt_has(n)]
+        return print("\n".join(f"{n}: {overopt(n)}" for n in names))
     done = {(r["seed"], r["run"]) for r in csv.DictReader(open(OUT))} if OUT.exists() else set()
     with tempfile.TemporaryDirectory() as tmp:
         for seed, name, flags in RUNS:
