@@ -7,8 +7,8 @@ now over the tokens of an answer, with a reward that a network learned from a ju
 rankings instead of a program's check. docs/ppo_to_rlhf.md maps each line to its PPO line.
 The run, top to bottom:
 
-    supervise  the tiny transformer of grpo_addition.py on sums like "47+38=085.", half of
-               whose carries are dropped in the labels (supervised data wrong sometimes)
+    supervise  the tiny transformer of grpo_addition.py on sums like "47+38=085.", 30% of
+               whose labels have the carry wrong (supervised data wrong sometimes)
     rank       K answers of the supervised model to each prompt, ranked by a hidden judge
                (the share of the answer's characters that are right); some pairs flipped,
                as people's labels are. The policy never sees the judge's score
@@ -22,7 +22,7 @@ The run, top to bottom:
     python rlhf_addition.py --eval runs/latest    # answers of the saved PPO and DPO models
 
 中文导读：基于人类反馈的强化学习（RLHF，InstructGPT 的三步），在一个会做加法的小 transformer 上跑通。
-先做监督训练（标签里有一半的进位被丢掉，模型只是有时答对）；然后让模型对每个题目写 K 个回答，由一个
+先做监督训练（30% 的标签把进位弄错了，模型只是有时答对）；然后让模型对每个题目写 K 个回答，由一个
 “评审”按隐藏的分数（答案里对的字符所占的比例）排序，其中一部分成对的比较被故意翻转，就像人的标注会出错；
 策略从来看不到这个分数。用这些成对偏好训练奖励模型（同一个 transformer 换成标量输出头，Bradley-Terry
 损失）；再用 PPO 训练策略：每个字符的奖励是 -beta 乘以它与冻结的监督模型之间的 KL 项，最后一个字符
