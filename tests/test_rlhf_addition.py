@@ -202,6 +202,6 @@ def test_the_pages_numbers_are_the_records():
         cell = r"[+-]?[\d.]+ \[[+-]?[\d.]+, [+-]?[\d.]+\]"  # median [lowest, highest]
         assert [re.findall(cell, row) for row in rows] == cells, page
         assert f"seeds {', '.join(map(str, seeds))}" in text.replace("种子 ", "seeds "), page
-        for name in ("default", "beta 1"):
+        for name in ("default", "beta 1", "judge"):
             for first, last in bench.overopt(name):
                 assert f"{first} → {last}" in text, (page, name, first, last)
