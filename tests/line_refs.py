@@ -13,7 +13,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 GUIDES = [ROOT / "README.zh-CN.md", ROOT / "docs" / "ppo_to_grpo.md",
-          ROOT / "docs" / "ppo_to_grpo.zh-CN.md"]
+          ROOT / "docs" / "ppo_to_grpo.zh-CN.md", ROOT / "docs" / "ppo_to_rlhf.md",
+          ROOT / "docs" / "ppo_to_rlhf.zh-CN.md"]
 REF = re.compile(r"`(\w+\.py):(\d+)`")
 
 

