@@ -9,7 +9,8 @@
                      the tools (runlog, report, checkpoints, cli), with what it holds (e.g. the
                      solved stop's break), main()
 
-    python benchmarks/line_shares.py            # the four scripts
+    python benchmarks/line_shares.py            # every script (a top-level *.py with a train())
+    python benchmarks/line_shares.py sac_walker.py   # one
 """
 
 import ast
@@ -18,16 +19,13 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SCRIPTS = ("ppo_cartpole.py", "ppo_kl_cartpole.py", "actor_critic_cartpole.py", "ddpg_walker.py",
-           "td3_walker.py", "sac_walker.py", "grpo_addition.py")
-ALGORITHM_DEFS = ("layer_init", "PolicyNetwork", "ValueNetwork", "ActorCritic", "Actor", "Critic",
-                  "RolloutBuffer", "ReplayBuffer", "compute_loss_pi", "compute_loss_v", "approx_kl",
-                  "adapt_beta", "ppo_update", "a2c_targets", "a2c_loss", "soft_update", "td_target",
-                  "compute_loss_actor", "ddpg_update", "build", "update_critics",
-                  "update_actor_and_targets", "encode", "decode", "Block", "TinyGPT", "prompt_of",
-                  "answer_of", "reward", "split_pairs", "sample", "completion_mask", "token_logp",
-                  "group_advantages", "grpo_loss", "sft_loss", "evaluate", "squashed_log_prob",
-                  "Temperature", "compute_loss_alpha")
+# The scripts, found as the tests find them: every top-level *.py with a train().
+SCRIPTS = sorted(p.name for p in ROOT.glob("*.py") if "\ndef train(" in p.read_text("utf-8"))
+# A script's top-level functions and classes are algorithm, but: main (the command line),
+# train (classified line by line), Config (its fields are the hyperparameters), and those
+# that draw or log (a def that calls the run's log, a tool or matplotlib, or is named so).
+NOT_ALGORITHM = ("main", "pictures", "draw")
+DRAWS_OR_LOGS = r"\b(run|plt|fig|ax)\b\.|\b(runlog|report|checkpoints|cli|plots)\."
 # In train(), a statement is plumbing when it calls the run's log or plumbing (a compound one:
 # when its first line does, and then all it holds); comment lines that name them are too.
 PLUMBING_IN_TRAIN = re.compile(r"\b(run|ctrl_c|in_checkpoint)\b|\b(runlog|report|checkpoints|cli)\."
@@ -68,7 +66,9 @@ def shares(path):
         if not isinstance(node, (ast.FunctionDef, ast.ClassDef)):
             continue
         span = range(node.lineno - 1 - len(node.decorator_list), node.end_lineno)
-        if node.name in ALGORITHM_DEFS:
+        source = "\n".join(lines[node.lineno - 1:node.end_lineno])
+        if node.name not in NOT_ALGORITHM + ("Config", "train") and not (
+                isinstance(node, ast.FunctionDef) and re.search(DRAWS_OR_LOGS, source)):
             for i in span:
                 kind[i] = "algorithm"
         elif node.name == "Config":
