@@ -239,11 +239,18 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
 
         r_t   = pi(o_t | q, o_<t) / pi_old(o_t | q, o_<t)
         L_t   = min(r_t A_i, clip(r_t, 1 - eps, 1 + eps) A_i) - beta * D_t
-        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (eq. 4; k3, never negative)
+        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (eq. 4; never negative)
 
-    D_t estimates KL(pi || pi_ref) from the sampled token (unbiased where it was drawn from
-    pi: in the first epoch), the direction opposite to ppo_kl_cartpole.py's KL(pi_old || pi);
-    its form is ppo_cartpole.py's approx_kl, (r - 1) - log r, with pi_ref / pi for r.
+    D_t is Schulman's "k3" estimator; its form is ppo_cartpole.py's approx_kl, (r - 1) - log r,
+    with pi_ref / pi for r. Two different things follow from it, and they point different ways:
+    - its value, averaged over tokens drawn from pi, estimates KL(pi || pi_ref) without bias
+      (in the first epoch, where pi_old = pi): the logged kl;
+    - its gradient, with the sampled tokens held fixed (as here: no gradient flows through
+      the draw), is in expectation the gradient of KL(pi_ref || pi), the other direction:
+      E_pi[grad D] = sum_a pi (1 - pi_ref / pi) grad log pi = -sum_a pi_ref grad log pi.
+      That is the direction of ppo_kl_cartpole.py's exact KL(pi_old || pi), with pi_ref for
+      pi_old (tests check it by exact enumeration). RLHF's KL in the reward, pushed by the
+      policy gradient through the draw, follows the gradient of KL(pi || pi_ref) instead.
     Averaged over each completion's own tokens (mask), then over completions; with
     length_norm=False, each completion's sum over the longest possible length (Dr. GRPO).
     The logged kl, clipfrac and ratio are the last epoch's, before its step."""
@@ -251,7 +258,7 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
     surrogate = torch.min(ratio * adv[:, None],
                           torch.clamp(ratio, 1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
     log_ref_ratio = logp_ref - logp
-    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # k3 of KL(pi || pi_ref), per token
+    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # D_t (k3) per token; see the docstring
     per_token = (surrogate - cfg.beta * kl) * mask
     length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
     loss = -(per_token.sum(1) / length).mean()

@@ -82,6 +82,34 @@ def test_grpo_loss_by_hand():
 
 
 @pytest.mark.quick
+def test_k3_value_is_kl_pi_ref_but_its_gradient_is_kl_ref_pi():
+    """Exact enumeration on a 5-action categorical: grpo_loss's penalty alone (A = 0, beta = 1),
+    one one-token completion per action, weighted by pi with the samples held fixed (pi
+    detached, as the draw is). Its value is KL(pi || pi_ref); its gradient is that of
+    KL(pi_ref || pi), the direction of ppo_kl_cartpole.py's exact KL(pi_old || pi), and not
+    that of KL(pi || pi_ref), which the policy gradient of a KL in the reward follows."""
+    from torch.distributions import Categorical, kl_divergence
+
+    torch.manual_seed(0)
+    theta = torch.randn(5, dtype=torch.float64, requires_grad=True)
+    ref = torch.log_softmax(torch.randn(5, dtype=torch.float64), 0)
+    logp = torch.log_softmax(theta, 0)
+    cfg = grpo.Config(beta=1.0)
+    one = torch.ones(1, 1, dtype=torch.float64)
+    penalty = [grpo.grpo_loss(logp[a].view(1, 1), logp[a].detach().view(1, 1), ref[a].view(1, 1),
+                              torch.zeros(1, dtype=torch.float64), one, cfg)[0]
+               for a in range(5)]  # with A = 0 the loss is beta * D_a, per action
+    expected = (logp.exp().detach() * torch.stack(penalty)).sum()  # E_{a ~ pi}[D_a]
+    pi, pi_ref = Categorical(logits=logp), Categorical(logits=ref)
+    assert expected.item() == pytest.approx(kl_divergence(pi, pi_ref).item(), rel=1e-9)
+    grad, = torch.autograd.grad(expected, theta, retain_graph=True)
+    reverse, = torch.autograd.grad(kl_divergence(pi_ref, pi), theta, retain_graph=True)
+    forward, = torch.autograd.grad(kl_divergence(pi, pi_ref), theta)
+    assert torch.allclose(grad, reverse, atol=1e-12)
+    assert not torch.allclose(grad, forward, atol=1e-3)
+
+
+@pytest.mark.quick
 def test_token_logp_reads_the_completion_tokens_only():
     torch.manual_seed(0)
     model = grpo.TinyGPT(1, 16, 2, 8)
