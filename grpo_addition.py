@@ -311,7 +311,8 @@ NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "len
 
 def train(cfg: Config):
     """Supervise, then GRPO (or, with --control, supervise on). Returns a dict: run_dir,
-    before and after (held-out pass@1 and pass@G after each phase), interrupted."""
+    before and after (held-out pass@1 and pass@G after each phase), reference (pi_ref, the
+    KL's anchor), interrupted."""
     torch.manual_seed(cfg.seed)  # the model's init
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
@@ -353,6 +354,7 @@ def train(cfg: Config):
 
         # --- GRPO: sample a group per prompt, score it, push up the better completions ---
         reference = copy.deepcopy(model).requires_grad_(False)  # pi_ref, frozen: the KL's anchor
+        result["reference"] = reference
         opt = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)
         for step in range(1, (0 if cfg.control else cfg.grpo_steps) + 1):
             picks = rng.integers(0, len(train_pairs), cfg.prompts)

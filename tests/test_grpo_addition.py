@@ -135,6 +135,25 @@ def test_a_tiny_run_in_process(tmp_path):
     assert (result["run_dir"] / "model.pt").exists()
 
 
+@pytest.mark.quick
+def test_the_kl_anchor_is_the_frozen_supervised_model(tmp_path):
+    """pi_ref is the model as supervision left it, and stays so through GRPO: the same seed's
+    run with no GRPO step saves exactly that model. A reference that moves with the policy
+    (the same object, or a copy taken again later) would make the KL measure nothing."""
+    small = dict(digits=1, sft_steps=30, eval_every=10, eval_prompts=10, n_layer=1,
+                 d_model=16, curves=False, print_every=10**6)
+    supervised = grpo.train(grpo.Config(grpo_steps=0, run_dir=str(tmp_path / "a"), **small))
+    saved = torch.load(supervised["run_dir"] / "model.pt", weights_only=True)["model"]
+    result = grpo.train(grpo.Config(grpo_steps=10, run_dir=str(tmp_path / "b"), **small))
+    reference = result["reference"].state_dict()
+    assert reference.keys() == saved.keys()
+    for name, weight in saved.items():
+        assert torch.equal(reference[name], weight), name
+    trained = torch.load(result["run_dir"] / "model.pt", weights_only=True)["model"]
+    assert any(not torch.equal(trained[k], saved[k]) for k in saved)  # GRPO moved the policy
+    assert not any(p.requires_grad for p in result["reference"].parameters())
+
+
 def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
     p = run_script("grpo_addition.py", *SMALL, "--run-dir", tmp_path, timeout=120)
     assert p.returncode == 0, p.stderr
