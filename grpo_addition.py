@@ -26,6 +26,7 @@ PPO line. The run, top to bottom:
 """
 
 import copy
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -36,6 +37,7 @@ import torch.nn.functional as F
 
 import checkpoints
 import cli
+import common
 import report
 import runlog
 
@@ -94,7 +96,7 @@ class TinyGPT(nn.Module):
 class Config(cli.OutputFlags):
     """The task's and the algorithm's settings; the flags every script shares (--run-dir,
     --eval, --threads, ...) come from cli.OutputFlags."""
-    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif")  # no env to play: not in --help
+    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda")  # no env, no GPU code
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 3
@@ -142,10 +144,26 @@ class Config(cli.OutputFlags):
     """held-out prompts for pass@1 and pass@G (G = group_size samples each)"""
     eval_every: int = 250
     """supervised steps between two held-out checks (GRPO: a tenth of it) on 100 prompts"""
-    control: bool = False
-    """no GRPO: keep supervising on the same data for as many steps as fit GRPO's time"""
-    control_steps: int = 2500
-    """--control: the extra supervised steps (about as long as GRPO's phase; docs/ppo_to_grpo.md)"""
+    # --- the two baselines, in GRPO's place ---
+    rft: bool = False
+    """rejection-sampling fine-tuning instead of GRPO: the same prompts, the same G sampled
+    answers each, the same verifier, optimizer and step size; cross-entropy on the answers
+    the verifier accepts, the others dropped (the fair baseline: the same information)"""
+    more_labels: bool = False
+    """no GRPO: go on imitating the same noisy labels (a control that never sees the
+    verifier), for more_labels_steps steps"""
+    more_labels_steps: int = 2500
+    """--more-labels: the extra supervised steps (about as long as GRPO's phase, in seconds)"""
+    start_from: str | None = None
+    """a saved run (its folder or model.pt) whose model stands in for the supervised phase:
+    GRPO, --rft and --more-labels from one supervised model (the seed and the model's shape
+    must be the run's)"""
+    # --- the shared flags, as they read here ---
+    eval: str | None = None
+    """a saved model (model.pt) or its run folder: skip training, print its answers to 8
+    held-out sums and its held-out pass@1 and pass@G"""
+    eval_seed: int = 10_000
+    """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
     def __post_init__(self):
         super().__post_init__()
@@ -153,8 +171,12 @@ class Config(cli.OutputFlags):
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", grpo_steps=">= 0",
                          prompts="> 0", group_size="> 1", update_epochs="> 0",
                          learning_rate="> 0", clip_coef="> 0", beta=">= 0",
-                         eval_prompts="> 0", label_noise="[0, 1]", control_steps=">= 0",
+                         eval_prompts="> 0", label_noise="[0, 1]", more_labels_steps=">= 0",
                          eval_every="> 0")
+        cli.check(not (self.rft and self.more_labels), "--rft and --more-labels each take "
+                  "GRPO's place: pass one")
+        cli.check(not self.cuda, "--cuda: this script has no GPU code (its model is tiny): it "
+                  "runs on the CPU")
         cli.check(self.eval_every >= 10, f"--eval-every must be at least 10, got {self.eval_every}")
         cli.check(not (self.gif or self.watch), "--gif and --watch play an env, and this task "
                   "has none: --eval prints the saved model's answers")
@@ -306,13 +328,27 @@ def completions(model, cfg, held_out, n=6):
 NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "length"), float("nan"))
 
 
+def saved_start(cfg):
+    """--start-from: the saved run's weights, refused in one line where its seed (and so its
+    held-out sums) or its model's shape differ from cfg's; read before the run folder is made."""
+    saved = checkpoints.load_checkpoint(cfg.start_from, script=SCRIPT,
+                                        required=("model", "config"))
+    for name in ("seed", "digits", "eval_prompts", "n_layer", "d_model", "n_head"):
+        flag, value = "--" + name.replace("_", "-"), saved["config"].get(name)
+        if value != getattr(cfg, name):
+            raise common.UserError(f"--start-from {cfg.start_from} was made with {flag} {value}, "
+                                   f"not {getattr(cfg, name)}: pass {flag} {value}")
+    return saved["model"]
+
+
 # ==== Training ============================================================================
 
 
 def train(cfg: Config):
-    """Supervise, then GRPO (or, with --control, supervise on). Returns a dict: run_dir,
-    before and after (held-out pass@1 and pass@G after each phase), reference (pi_ref, the
-    KL's anchor), interrupted."""
+    """Supervise, then GRPO (or, in its place, --rft or --more-labels). Returns a dict:
+    run_dir, before and after (held-out pass@1 and pass@G after each phase), reference (pi_ref,
+    the KL's anchor), interrupted."""
+    start = saved_start(cfg) if cfg.start_from else None
     torch.manual_seed(cfg.seed)  # the model's init
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
@@ -323,7 +359,8 @@ def train(cfg: Config):
     run = runlog.UpdateLog(SCRIPT, cfg, task=f"addition{cfg.digits}", shown=dict(
         loss=".4f", reward=".3f", flat_groups=".2f", kl=".4f", clipfrac=".3f", pass1=".3f"))
     held = lambda n=len(held_out): evaluate(model, held_out[:n], cfg)  # noqa: E731
-    result = dict(run_dir=run.dir, before=None, after=None, samples={})
+    result = dict(run_dir=run.dir, before=None, after=None, samples={}, reference=None)
+    second = "rft" if cfg.rft else "more_labels" if cfg.more_labels else "grpo"  # phase 2's name
 
     def supervised_batch():  # prompt + answer, the answer's carry dropped in label_noise of them
         picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
@@ -332,31 +369,46 @@ def train(cfg: Config):
                                     + answer_of(*train_pairs[i], cfg.digits, drop))
                              for i, drop in zip(picks, noisy)])
 
-    # Ctrl-C ends training; either way, model.pt is saved as training left it
+    def supervised_step(opt, seqs):  # one step of cross-entropy on whole answers
+        loss = sft_loss(model, seqs, P)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        return loss
+
+    # Ctrl-C ends training; either way, model.pt is saved as training left it. progress.csv
+    # numbers its rows on across the phases: the second phase's step k is row sft_steps + k.
     with run.saving_model(dict(model=model)):
         # --- supervised phase: imitate the labels, wrong ones included ---
-        opt, phase_start = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr), time.time()
-        for step in range(1, cfg.sft_steps + (cfg.control_steps if cfg.control else 0) + 1):
-            loss = sft_loss(model, supervised_batch(), P)
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
+        sft_steps = 0 if start else cfg.sft_steps
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr)
+        for step in range(1, sft_steps + 1):
+            loss = supervised_step(opt, supervised_batch())
             run.global_step = step
             if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
-            if step == cfg.sft_steps:
-                result["before"] = held()  # what GRPO (or the control) starts from
-                result["samples"]["before"] = completions(model, cfg, held_out)
-                print(f"supervised: held-out pass@1 {result['before'][0]:.3f}, "
-                      f"pass@{cfg.group_size} {result['before'][1]:.3f} (phase supervised "
-                      f"took {time.time() - run.start_time:.0f} s)", flush=True)
-                phase_start = time.time()
+        if start:
+            model.load_state_dict(start)  # --start-from: a supervised model saved before
+        result["before"] = held()  # what GRPO (or a baseline) starts from
+        result["samples"]["before"] = completions(model, cfg, held_out)
+        print(f"supervised{' (' + str(cfg.start_from) + ')' if start else ''}: held-out "
+              f"pass@1 {result['before'][0]:.3f}, pass@{cfg.group_size} {result['before'][1]:.3f}"
+              f" (phase supervised took {time.time() - run.start_time:.0f} s); next, {second}: "
+              f"progress rows from step {sft_steps + 1}", flush=True)
+        phase_start = time.time()
+
+        # --- the label control: more of the same supervision, never the verifier ---
+        for step in range(1, (cfg.more_labels_steps if cfg.more_labels else 0) + 1):
+            loss = supervised_step(opt, supervised_batch())
+            run.global_step = sft_steps + step
+            if step % cfg.eval_every == 0:
+                run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
 
         # --- GRPO: sample a group per prompt, score it, push up the better completions ---
         reference = copy.deepcopy(model).requires_grad_(False)  # pi_ref, frozen: the KL's anchor
         result["reference"] = reference
-        opt = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)
-        for step in range(1, (0 if cfg.control else cfg.grpo_steps) + 1):
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)  # --rft: the same
+        for step in range(1, (0 if cfg.more_labels else cfg.grpo_steps) + 1):
             picks = rng.integers(0, len(train_pairs), cfg.prompts)
             prompts = torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)) for i in picks])
             seqs = sample(model, prompts.repeat_interleave(cfg.group_size, 0), L, gen)  # pi_old
@@ -366,28 +418,47 @@ def train(cfg: Config):
             mask = completion_mask(seqs[:, P:])  # the answer's tokens; the prompt is not learned
             with torch.no_grad():  # pi_old and pi_ref of every completion token, (B * G, L)
                 logp_old, logp_ref = token_logp(model, seqs, P), token_logp(reference, seqs, P)
-            for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
-                loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv, mask,
-                                       cfg)
-                opt.zero_grad()
-                loss.backward()
-                opt.step()
-            run.global_step = cfg.sft_steps + step
+            if cfg.rft:  # the baseline: the same samples and steps; imitate the right answers
+                kept = seqs[rewards > 0]  # a right answer is exactly L tokens: no padding
+                loss = torch.tensor(float("nan"))  # no right answer in the batch: no step
+                for _ in range(cfg.update_epochs if len(kept) else 0):
+                    loss = supervised_step(opt, kept)
+                k3 = torch.exp(logp_ref - logp_old) - (logp_ref - logp_old) - 1  # D, logged only
+                info = dict(kl=((k3 * mask).sum() / mask.sum()).item(), clipfrac=float("nan"),
+                            ratio=None)
+            else:
+                for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
+                    loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv,
+                                           mask, cfg)
+                    opt.zero_grad()
+                    loss.backward()
+                    opt.step()
+            run.global_step = sft_steps + step
             flat = (rewards.view(-1, cfg.group_size).std(1) == 0).float().mean().item()
             checked = step % (cfg.eval_every // 10) == 0
             run.update(dict(loss=loss.item(), reward=rewards.mean().item(), flat_groups=flat,
                             kl=info["kl"], clipfrac=info["clipfrac"],
                             length=mask.sum(1).mean().item(),
-                            pass1=held(100)[0] if checked else float("nan"), ratio=info["ratio"]),
+                            pass1=held(100)[0] if checked else float("nan"))
+                       | ({} if info["ratio"] is None else dict(ratio=info["ratio"])),
                        show=checked)
         result["after"], result["samples"]["after"] = held(), completions(model, cfg, held_out)
-        print(f"after {'more supervision' if cfg.control else 'GRPO'}: held-out pass@1 "
-              f"{result['after'][0]:.3f}, pass@{cfg.group_size} {result['after'][1]:.3f} (phase "
-              f"{'control' if cfg.control else 'grpo'} took {time.time() - phase_start:.0f} s)",
+        print(f"after {second}: held-out pass@1 {result['after'][0]:.3f}, pass@{cfg.group_size} "
+              f"{result['after'][1]:.3f} (phase {second} took {time.time() - phase_start:.0f} s)",
               flush=True)
-    if not run.interrupted:  # curve.png and inside.png (--curves), TensorBoard (--tensorboard)
-        report.finish_grpo(run, result["samples"], cfg)
+    pictures(run, result["samples"], cfg, sft_steps)  # also after Ctrl-C: what was logged
     return dict(result, interrupted=run.interrupted)
+
+
+def pictures(run, samples, cfg, sft_steps):
+    """curve.png and inside.png (--curves), TensorBoard (--tensorboard), from progress.csv.
+    report.finish_grpo reads cfg.control (a second phase without GRPO's ratio: the baselines)
+    and cfg.sft_steps (the row where that phase begins)."""
+    if not (run.dir / "progress.csv").exists():  # stopped before the first logged row
+        return
+    shown = copy.copy(cfg)
+    shown.control, shown.sft_steps = cfg.rft or cfg.more_labels, sft_steps
+    report.finish_grpo(run, samples, shown)
 
 
 def main(argv=None):
@@ -397,12 +468,14 @@ def main(argv=None):
         if not cfg.eval:
             result = train(cfg)
             if result["interrupted"]:
-                print(f"interrupted: {result['run_dir']} holds model.pt as training left it",
-                      flush=True)
+                print(f"interrupted: {result['run_dir']} holds model.pt as training left it, "
+                      "curve.png and inside.png of what was logged", flush=True)
                 raise SystemExit(130)
             return
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
-        run_cfg = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
+        fields = {f.name for f in dataclasses.fields(Config)}
+        run_cfg = Config(**{**{k: v for k, v in saved["config"].items() if k in fields},
+                            "eval": None, "gif": None, "start_from": None})  # its task, its split
         model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda c: TinyGPT(
             run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head,
             (2 * run_cfg.digits + 2) + (run_cfg.digits + 2)))  # prompt + answer tokens
@@ -410,10 +483,10 @@ def main(argv=None):
                                   np.random.default_rng(run_cfg.seed))  # the run's own split
         lines = completions(model, run_cfg, held_out, n=8)
         print(f"{len(lines)} held-out prompts, each with {run_cfg.group_size} sampled answers "
-              "(. ends an answer):\n" + "\n".join(lines), flush=True)
+              "(. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
         pass1, passG = evaluate(model, held_out, run_cfg)
         print(f"held-out ({len(held_out)} prompts): pass@1 {pass1:.3f}, "
-              f"pass@{run_cfg.group_size} {passG:.3f}  (x: a wrong completion)", flush=True)
+              f"pass@{run_cfg.group_size} {passG:.3f}", flush=True)
 
 
 if __name__ == "__main__":

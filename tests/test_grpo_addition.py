@@ -154,6 +154,78 @@ def test_the_kl_anchor_is_the_frozen_supervised_model(tmp_path):
     assert not any(p.requires_grad for p in result["reference"].parameters())
 
 
+TINY = dict(digits=1, sft_steps=100, sft_lr=1e-2, grpo_steps=10, eval_every=100, eval_prompts=10,
+            n_layer=1, d_model=16, curves=False, print_every=10**6)
+
+
+def recorded_second_phase(monkeypatch, tmp_path, **arm):
+    """A tiny run of one arm, recording what its second phase samples (the prompts and the
+    answers of each batch of B * G), the batches it imitates, and its optimizers' steps."""
+    seen = dict(prompts=[], answers=[], imitated=[], steps=[])
+    sample, sft_loss = grpo.sample, grpo.sft_loss
+
+    def recording_sample(model, prompts, n_new, generator):
+        seqs = sample(model, prompts, n_new, generator)
+        if len(prompts) == 32 * 8:  # a training batch, B * G (the checks sample fewer)
+            seen["prompts"].append(prompts.clone())
+            seen["answers"].append(seqs.clone())
+        return seqs
+
+    def recording_sft_loss(model, seqs, P):
+        if seen["prompts"]:  # after the first sampled batch: the second phase
+            seen["imitated"].append(seqs.clone())
+        return sft_loss(model, seqs, P)
+
+    class CountingAdam(torch.optim.Adam):
+        def step(self, *a, **k):
+            seen["steps"].append(self.defaults["lr"])
+            return super().step(*a, **k)
+
+    monkeypatch.setattr(grpo, "sample", recording_sample)
+    monkeypatch.setattr(grpo, "sft_loss", recording_sft_loss)
+    monkeypatch.setattr(grpo.torch.optim, "Adam", CountingAdam)
+    grpo.train(grpo.Config(run_dir=str(tmp_path), **TINY, **arm))
+    monkeypatch.undo()
+    return seen
+
+
+@pytest.mark.quick
+def test_rft_sees_what_grpo_sees_and_imitates_only_verified_answers(monkeypatch, tmp_path):
+    """The fair baseline's budget: the same prompts, batch by batch, the same number of
+    sampled answers, as many steps with the same optimizer and step size; what it imitates
+    is exactly each batch's answers that the verifier accepts."""
+    g = recorded_second_phase(monkeypatch, tmp_path / "grpo")
+    r = recorded_second_phase(monkeypatch, tmp_path / "rft", rft=True)
+    cfg = grpo.Config(**TINY)
+    assert len(g["prompts"]) == len(r["prompts"]) == cfg.grpo_steps
+    assert all(torch.equal(a, b) for a, b in zip(g["prompts"], r["prompts"]))
+    assert [len(a) for a in g["answers"]] == [len(a) for a in r["answers"]]
+    second = lambda steps: steps[cfg.sft_steps:]  # noqa: E731
+    P = 2 * cfg.digits + 2
+    right = [[s for s in batch.tolist() if grpo.reward(grpo.decode(s[:P]), grpo.decode(s[P:]),
+                                                       cfg.digits)] for batch in r["answers"]]
+    assert second(g["steps"]) == [cfg.learning_rate] * cfg.grpo_steps * cfg.update_epochs
+    assert second(r["steps"]) == [cfg.learning_rate] * sum(map(bool, right)) * cfg.update_epochs
+    imitated = [batch.tolist() for batch in r["imitated"]]
+    assert imitated == [batch for batch in right for _ in range(cfg.update_epochs)]
+    assert sum(0 < len(batch) < len(answers) for batch, answers in zip(right, r["answers"])) >= 5
+
+
+@pytest.mark.quick
+def test_start_from_begins_at_the_saved_supervised_model(tmp_path):
+    """--start-from: the arms of one seed start from one supervised model (benchmarks/
+    grpo_seeds.py); a run of another seed (other held-out sums) is refused before a folder."""
+    small = dict(TINY, grpo_steps=0, sft_steps=30)
+    supervised = grpo.train(grpo.Config(run_dir=str(tmp_path / "sft"), **small))
+    again = grpo.train(grpo.Config(run_dir=str(tmp_path / "arm"), start_from=str(
+        supervised["run_dir"]), **dict(small, sft_steps=7)))  # its own sft_steps are not run
+    assert again["before"] == supervised["after"]
+    with pytest.raises(grpo.common.UserError, match="was made with --seed 0, not 1"):
+        grpo.train(grpo.Config(run_dir=str(tmp_path / "other"), seed=1,
+                               start_from=str(supervised["run_dir"]), **small))
+    assert not (tmp_path / "other").exists()
+
+
 def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
     p = run_script("grpo_addition.py", *SMALL, "--run-dir", tmp_path, timeout=120)
     assert p.returncode == 0, p.stderr
@@ -182,7 +254,10 @@ def test_same_seed_same_log(tmp_path):
 
 @pytest.mark.parametrize("args,needle", [(["--group-size", "1"], "--group-size must be > 1"),
                                          (["--d-model", "30"], "multiple of --n-head"),
-                                         (["--label-noise", "2"], "--label-noise must be in [0, 1]")])
+                                         (["--label-noise", "2"], "--label-noise must be in [0, 1]"),
+                                         (["--cuda"], "no GPU code"),
+                                         (["--rft", "--more-labels"], "pass one"),
+                                         (["--start-from", "nowhere"], "no checkpoint at")])
 def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
     p = run_script("grpo_addition.py", *args, "--run-dir", tmp_path, timeout=60)
     assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
@@ -194,10 +269,13 @@ def test_help_leaves_out_the_shared_flags_that_play_an_env(capsys):
     --watch, --gif); given anyway, --watch gets one line saying why (not a hint to use --gif)."""
     with pytest.raises(SystemExit):
         grpo.cli.parse_config(grpo.Config, ["--help"])
-    shown = capsys.readouterr().out
+    shown = " ".join(capsys.readouterr().out.split())  # argparse wraps the help at any word
     assert "--eval-seed" in shown and "--run-dir" in shown
-    for flag in ("--gifs", "--eval-episodes", "--watch", "--gif "):
+    for flag in ("--gifs", "--eval-episodes", "--watch", "--gif ", "--cuda"):
         assert flag not in shown, flag
+    for words in ("evaluation env", "play it"):  # the shared help, written for an env
+        assert words not in shown, words
+    assert "held-out pass@1 and pass@G" in shown and "--rft" in shown
     with pytest.raises(SystemExit) as stop:
         grpo.cli.parse_config(grpo.Config, ["--watch"])
     err = capsys.readouterr().err
@@ -212,5 +290,7 @@ def test_ctrl_c_keeps_the_model(tmp_path):
                                "--print-every", 1, "--run-dir", tmp_path, after="step     30")
     assert code == 130, err
     (run,) = tmp_path.iterdir()
-    assert (run / "model.pt").exists() and not list(run.glob("*.tmp"))
-    assert "model.pt as training left it" in out
+    assert {f.name for f in run.iterdir()} >= {"model.pt", "progress.csv", "curve.png",
+                                                 "inside.png"}
+    assert not list(run.glob("*.tmp"))
+    assert "model.pt as training left it, curve.png and inside.png" in out
