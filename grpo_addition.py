@@ -312,7 +312,7 @@ def evaluate(model, pairs, cfg):
     return right.mean().item(), right.max(1).values.mean().item()
 
 
-def completions(model, cfg, held_out, n=6):
+def completions(model, cfg, held_out, n=8):
     """G completions of each of the first n held-out prompts, "x" after a wrong one."""
     P, L, gen = 2 * cfg.digits + 2, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed)
     lines = []
@@ -481,7 +481,7 @@ def main(argv=None):
             (2 * run_cfg.digits + 2) + (run_cfg.digits + 2)))  # prompt + answer tokens
         _, held_out = split_pairs(run_cfg.digits, run_cfg.eval_prompts,
                                   np.random.default_rng(run_cfg.seed))  # the run's own split
-        lines = completions(model, run_cfg, held_out, n=8)
+        lines = completions(model, run_cfg, held_out)
         print(f"{len(lines)} held-out prompts, each with {run_cfg.group_size} sampled answers "
               "(. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
         pass1, passG = evaluate(model, held_out, run_cfg)

@@ -309,7 +309,8 @@ def draw_grpo(run, samples, cfg):
     for row, when in enumerate(("before", "after"), start=1):
         ax = fig.add_subplot(grid[row, :])
         ax.axis("off")
-        ax.set_title(f"held-out prompts and {cfg.group_size} answers each (x: wrong), {when} "
+        ax.set_title(f"{len(samples.get(when, []))} held-out sums, {cfg.group_size} sampled "
+                     f"answers each (x: wrong), {when} "
                      f"{'GRPO' if not cfg.control else 'more supervision'}", fontsize=9)
         ax.text(0, 1, "\n".join(samples.get(when, [])), va="top", family="monospace", fontsize=8)
     print(f"inside: {plots.save_whole(plt, fig, run.dir / 'inside.png', dpi=72)}", flush=True)

@@ -81,22 +81,39 @@ def read_record():
         return list(csv.DictReader(f))
 
 
-def summary(rows):
-    """The page's numbers: per arm, median [lowest, highest] of pass@1 and pass@G; per pair,
-    the median difference, its range and the seeds on which it is above zero."""
-    lines = [f"{len(rows)} seeds: {', '.join(r['seed'] for r in rows)}"]
+PAIRS = (("grpo", "rft"), ("grpo", "more_labels"), ("rft", "more_labels"), ("grpo", "before"),
+         ("rft", "before"), ("more_labels", "before"))
+
+
+def table_rows(rows):
+    """docs/ppo_to_grpo.md's two tables, their cells after the first column (numbers only, the
+    same in both languages): per arm, median [lowest, highest] of pass@1 and pass@G; per pair
+    of arms, the median of the per-seed differences [lowest, highest] (on how many seeds it is
+    above 0 / of how many)."""
     get = lambda r, k: float(r[k])  # noqa: E731
+    out = []
     for arm in ["before"] + list(ARMS):
+        cells = []
         for m in ("pass1", "passG"):
             v = [get(r, f"{arm}_{m}") for r in rows]
-            lines.append(f"{arm} {m}: {statistics.median(v):.3f} [{min(v):.3f}, {max(v):.3f}]")
-    for a, b in (("grpo", "rft"), ("grpo", "more_labels"), ("rft", "more_labels"),
-                 ("grpo", "before"), ("rft", "before"), ("more_labels", "before")):
+            cells.append(f"{statistics.median(v):.3f} [{min(v):.3f}, {max(v):.3f}]")
+        out.append(cells)
+    for a, b in PAIRS:
+        cells = []
         for m in ("pass1", "passG"):
-            d = [get(r, f"{a}_{m}") - get(r, f"{b}_{m}") for r in rows]
-            lines.append(f"{a} - {b} {m}: {statistics.median(d):+.3f} [{min(d):+.3f}, "
-                         f"{max(d):+.3f}], above 0 on {sum(x > 0 for x in d)} of {len(d)}")
-    return lines
+            d = [round(get(r, f"{a}_{m}") - get(r, f"{b}_{m}"), 3) for r in rows]
+            cells.append(f"{statistics.median(d):+.3f} [{min(d):+.3f}, {max(d):+.3f}] "
+                         f"({sum(x > 0 for x in d)}/{len(d)})")
+        out.append(cells)
+    return out
+
+
+def summary(rows):
+    """The record in a few lines: its seeds, then the page's rows, first column named."""
+    names = ["supervised"] + list(ARMS) + [f"{a} - {b}" for a, b in PAIRS]
+    return ([f"{len(rows)} seeds: {', '.join(r['seed'] for r in rows)}"]
+            + [f"| {name} | " + " | ".join(cells) + " |"
+               for name, cells in zip(names, table_rows(rows))])
 
 
 def main():
