@@ -16,6 +16,8 @@ PPO line. The run, top to bottom:
                (k3), prompt and padding tokens masked out; no critic
 
     python grpo_addition.py                 # supervise, then GRPO (a few minutes on a CPU)
+    python grpo_addition.py --rft           # the fair baseline in GRPO's place: imitate the
+                                            # sampled answers the verifier accepts
     python grpo_addition.py --eval runs/latest    # completions of the saved model
 
 中文导读：GRPO（组相对策略优化，DeepSeekMath 2024），把 PPO 用在语言模型上。状态是提示加上已经写出的
