@@ -46,6 +46,7 @@ import runlog
 SCRIPT = "grpo_addition"  # names its run folders; saved in its models (it loads no other's)
 VOCAB = "0123456789+=."  # "." ends an answer; after it, padding
 STOI = {ch: i for i, ch in enumerate(VOCAB)}
+STILL_RISING = 0.1  # held-out pass@1 up by more than this over the supervised phase's last check
 
 
 def encode(text):
@@ -384,11 +385,18 @@ def train(cfg: Config):
         # --- supervised phase: imitate the labels, wrong ones included ---
         sft_steps = 0 if start else cfg.sft_steps
         opt = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr)
+        checks = []  # held-out pass@1 (100 sums) every eval_every steps
         for step in range(1, sft_steps + 1):
             loss = supervised_step(opt, supervised_batch())
             run.global_step = step
             if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
-                run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
+                checks.append(held(100)[0])
+                run.update(dict(NO_GRPO, loss=loss.item(), pass1=checks[-1]), show=True)
+        if len(checks) >= 2 and checks[-1] - checks[-2] > STILL_RISING:
+            # pass@1 sits near 0 for a while, then rises fast; how long it sits differs by seed
+            print(f"note: held-out pass@1 was still rising when supervision ended ("
+                  f"{checks[-2]:.2f} -> {checks[-1]:.2f}): the supervised phase ended partway; "
+                  "more --sft-steps lets it finish (docs/ppo_to_grpo.md)", flush=True)
         if start:
             model.load_state_dict(start)  # --start-from: a supervised model saved before
         result["before"] = held()  # what GRPO (or a baseline) starts from

@@ -226,6 +226,22 @@ def test_start_from_begins_at_the_saved_supervised_model(tmp_path):
     assert not (tmp_path / "other").exists()
 
 
+@pytest.mark.quick
+@pytest.mark.parametrize("checks,noted", [((0.02, 0.05, 0.40), True), ((0.05, 0.70, 0.72), False)])
+def test_a_supervised_phase_that_ends_mid_rise_is_noted(checks, noted, monkeypatch, capsys,
+                                                        tmp_path):
+    """Held-out pass@1 sits near 0, then rises fast, at a step that differs by seed: where the
+    last check is still well above the one before, the run says the phase ended partway."""
+    seen = iter(checks)
+    monkeypatch.setattr(grpo, "evaluate", lambda model, pairs, cfg: (next(seen, 0.5), 0.9))
+    grpo.train(grpo.Config(**dict(TINY, sft_steps=30, eval_every=10, grpo_steps=0,
+                                  run_dir=str(tmp_path))))  # checks at steps 10, 20, 30
+    out = capsys.readouterr().out
+    assert ("note: held-out pass@1 was still rising" in out) == noted, out
+    if noted:
+        assert "(0.05 -> 0.40)" in out and "--sft-steps" in out
+
+
 def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
     p = run_script("grpo_addition.py", *SMALL, "--run-dir", tmp_path, timeout=120)
     assert p.returncode == 0, p.stderr
@@ -294,3 +310,27 @@ def test_ctrl_c_keeps_the_model(tmp_path):
                                                  "inside.png"}
     assert not list(run.glob("*.tmp"))
     assert "model.pt as training left it, curve.png and inside.png" in out
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("page,seeds", [("docs/ppo_to_grpo.md", "It covers {} seeds"),
+                                        ("docs/ppo_to_grpo.zh-CN.md", "覆盖了 {} 个种子")])
+def test_the_pages_tables_are_the_records(page, seeds):
+    """The three arms' table on the GRPO page, both languages: every number, in order, is
+    what benchmarks/grpo_seeds.py computes from its committed record, and the page says how
+    many seeds that is."""
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(grpo.__file__).parent
+    spec = importlib.util.spec_from_file_location("grpo_seeds", root / "benchmarks" / "grpo_seeds.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    rows, text = bench.read_record(), (root / page).read_text(encoding="utf-8")
+    assert rows, "no record"
+    at = 0
+    for cells in bench.table_rows(rows):
+        tail = " | ".join(cells) + " |"
+        assert text.find(tail, at) > at, f"{page}: not found after the row before: {tail}"
+        at = text.find(tail, at)
+    assert seeds.format(len(rows)) in text
