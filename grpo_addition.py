@@ -117,7 +117,9 @@ class Config(cli.OutputFlags):
     """attention heads"""
     # --- supervised phase ---
     sft_steps: int = 3000
-    """steps of supervised learning (cross-entropy on the answer tokens)"""
+    """steps of supervised learning (cross-entropy on the answer tokens); held-out pass@1
+    sits near 0, then rises fast, at a step that differs by seed (a run that ends mid-rise
+    says so: docs/ppo_to_grpo.md)"""
     sft_batch: int = 128
     """examples per supervised step"""
     sft_lr: float = 1e-3
