@@ -13,8 +13,8 @@ skipped, and a run already finished in the work folder is read back, not run aga
 interrupted benchmark goes on where it stopped. One run at a time, one torch thread, under
 nice.
 
-    python benchmarks/grpo_seeds.py                 # seeds 0-19, about 7 minutes a seed on
-                                                    # a free core
+    python benchmarks/grpo_seeds.py                 # seeds 0-19; 18 to 24 minutes a seed on
+                                                    # the crowded 2-core machine of the record
     python benchmarks/grpo_seeds.py --seeds 5 6 7   # those seeds only
     python benchmarks/grpo_seeds.py --table         # the page's table from the record
 """
