@@ -46,8 +46,8 @@ import runlog
 SCRIPT = "grpo_addition"  # names its run folders; saved in its models (it loads no other's)
 VOCAB = "0123456789+=."  # "." ends an answer; after it, padding
 STOI = {ch: i for i, ch in enumerate(VOCAB)}
-STILL_RISING = 0.15  # held-out pass@1 up by more than this over the supervised phase's
-RISE_CHECKS = 3  # last 3 checks (750 steps at the defaults): it ended partway up its rise
+STILL_RISING = 0.15  # held-out pass@1 up at each of the supervised phase's last RISE_CHECKS
+RISE_CHECKS = 3  # checks, by more than this in all: it ended partway up its rise
 
 
 def encode(text):
@@ -395,10 +395,12 @@ def train(cfg: Config):
             if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
                 checks.append(held(100)[0])
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=checks[-1]), show=True)
-        if len(checks) > RISE_CHECKS and checks[-1] - checks[-1 - RISE_CHECKS] > STILL_RISING:
+        last = checks[-1 - RISE_CHECKS:]  # the last checks and the one before them
+        if (len(last) > RISE_CHECKS and all(b > a for a, b in zip(last, last[1:]))
+                and last[-1] - last[0] > STILL_RISING):
             # pass@1 sits near 0 for a while, then rises fast; how long it sits differs by seed
             print(f"note: held-out pass@1 was still rising when supervision ended ("
-                  f"{checks[-1 - RISE_CHECKS]:.2f} -> {checks[-1]:.2f} over its last "
+                  f"{last[0]:.2f} -> {last[-1]:.2f} over its last "
                   f"{RISE_CHECKS * cfg.eval_every} steps): the supervised phase ended partway; "
                   "more --sft-steps lets it finish (docs/ppo_to_grpo.md)", flush=True)
         if start:

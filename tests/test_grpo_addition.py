@@ -229,7 +229,8 @@ def test_start_from_begins_at_the_saved_supervised_model(tmp_path):
 @pytest.mark.quick
 @pytest.mark.parametrize("checks,noted", [
     ((0.03, 0.07, 0.10, 0.25, 0.34, 0.38), True),  # seed 8's last six checks, rounded
-    ((0.69, 0.69, 0.71, 0.62, 0.71, 0.73), False)])  # seed 7's: risen long before, and noise
+    ((0.69, 0.69, 0.71, 0.62, 0.71, 0.73), False),  # seed 7's: risen long before, and noise
+    ((0.07, 0.07, 0.08, 0.72, 0.71, 0.73), False)])  # seed 9's: risen late, then level
 def test_a_supervised_phase_that_ends_mid_rise_is_noted(checks, noted, monkeypatch, capsys,
                                                         tmp_path):
     """Held-out pass@1 sits near 0, then rises fast, at a step that differs by seed: where the
