@@ -16,6 +16,8 @@ PPO line. The run, top to bottom:
                (k3), prompt and padding tokens masked out; no critic
 
     python grpo_addition.py                 # supervise, then GRPO (a few minutes on a CPU)
+    python grpo_addition.py --rft           # the fair baseline in GRPO's place: imitate the
+                                            # sampled answers the verifier accepts
     python grpo_addition.py --eval runs/latest    # completions of the saved model
 
 中文导读：GRPO（组相对策略优化，DeepSeekMath 2024），把 PPO 用在语言模型上。状态是题目（prompt）加上已经写出的
@@ -26,6 +28,7 @@ PPO line. The run, top to bottom:
 """
 
 import copy
+import dataclasses
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,12 +40,15 @@ import torch.nn.functional as F
 
 import checkpoints
 import cli
-import report
+import common
+import plots
 import runlog
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 VOCAB = "0123456789+=."  # "." ends an answer; after it, padding
 STOI = {ch: i for i, ch in enumerate(VOCAB)}
+STILL_RISING = 0.15  # held-out pass@1 up at each of the supervised phase's last RISE_CHECKS
+RISE_CHECKS = 3  # checks, by more than this in all: it ended partway up its rise
 
 
 def encode(text):
@@ -95,7 +101,7 @@ class TinyGPT(nn.Module):
 class Config(cli.OutputFlags):
     """The task's and the algorithm's settings; the flags every script shares (--run-dir,
     --eval, --threads, ...) come from cli.OutputFlags."""
-    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif")  # no env to play: not in --help
+    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda")  # no env, no GPU code
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 3
@@ -113,7 +119,9 @@ class Config(cli.OutputFlags):
     """attention heads"""
     # --- supervised phase ---
     sft_steps: int = 3000
-    """steps of supervised learning (cross-entropy on the answer tokens)"""
+    """steps of supervised learning (cross-entropy on the answer tokens); held-out pass@1
+    sits near 0, then rises fast, at a step that differs by seed (a run that ends mid-rise
+    says so: docs/ppo_to_grpo.md)"""
     sft_batch: int = 128
     """examples per supervised step"""
     sft_lr: float = 1e-3
@@ -143,10 +151,26 @@ class Config(cli.OutputFlags):
     """held-out prompts for pass@1 and pass@G (G = group_size samples each)"""
     eval_every: int = 250
     """supervised steps between two held-out checks (GRPO: a tenth of it) on 100 prompts"""
-    control: bool = False
-    """no GRPO: keep supervising on the same data for as many steps as fit GRPO's time"""
-    control_steps: int = 2500
-    """--control: the extra supervised steps (about as long as GRPO's phase; docs/ppo_to_grpo.md)"""
+    # --- the two baselines, in GRPO's place ---
+    rft: bool = False
+    """rejection-sampling fine-tuning instead of GRPO: the same prompts, the same G sampled
+    answers each, the same verifier, optimizer and step size; cross-entropy on the answers
+    the verifier accepts, the others dropped (the fair baseline: the same information)"""
+    more_labels: bool = False
+    """no GRPO: go on imitating the same noisy labels (a control that never sees the
+    verifier), for more_labels_steps steps"""
+    more_labels_steps: int = 2500
+    """--more-labels: the extra supervised steps (about as long as GRPO's phase, in seconds)"""
+    start_from: str | None = None
+    """a saved run (its folder or model.pt) whose model stands in for the supervised phase:
+    GRPO, --rft and --more-labels from one supervised model (the seed and the model's shape
+    must be the run's)"""
+    # --- the shared flags, as they read here ---
+    eval: str | None = None
+    """a saved model (model.pt) or its run folder: skip training, print its answers to 8
+    held-out sums and its held-out pass@1 and pass@G"""
+    eval_seed: int = 10_000
+    """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
     def __post_init__(self):
         super().__post_init__()
@@ -154,8 +178,12 @@ class Config(cli.OutputFlags):
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", grpo_steps=">= 0",
                          prompts="> 0", group_size="> 1", update_epochs="> 0",
                          learning_rate="> 0", clip_coef="> 0", beta=">= 0",
-                         eval_prompts="> 0", label_noise="[0, 1]", control_steps=">= 0",
+                         eval_prompts="> 0", label_noise="[0, 1]", more_labels_steps=">= 0",
                          eval_every="> 0")
+        cli.check(not (self.rft and self.more_labels), "--rft and --more-labels each take "
+                  "GRPO's place: pass one")
+        cli.check(not self.cuda, "--cuda: this script has no GPU code (its model is tiny): it "
+                  "runs on the CPU")
         cli.check(self.eval_every >= 10, f"--eval-every must be at least 10, got {self.eval_every}")
         cli.check(not (self.gif or self.watch), "--gif and --watch play an env, and this task "
                   "has none: --eval prints the saved model's answers")
@@ -240,11 +268,18 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
 
         r_t   = pi(o_t | q, o_<t) / pi_old(o_t | q, o_<t)
         L_t   = min(r_t A_i, clip(r_t, 1 - eps, 1 + eps) A_i) - beta * D_t
-        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (eq. 4; k3, never negative)
+        D_t   = pi_ref / pi - log(pi_ref / pi) - 1      (eq. 4; never negative)
 
-    D_t estimates KL(pi || pi_ref) from the sampled token (unbiased where it was drawn from
-    pi: in the first epoch), the direction opposite to ppo_kl_cartpole.py's KL(pi_old || pi);
-    its form is ppo_cartpole.py's approx_kl, (r - 1) - log r, with pi_ref / pi for r.
+    D_t is Schulman's "k3" estimator; its form is ppo_cartpole.py's approx_kl, (r - 1) - log r,
+    with pi_ref / pi for r. Two different things follow from it, and they point different ways:
+    - its value, averaged over tokens drawn from pi, estimates KL(pi || pi_ref) without bias
+      (in the first epoch, where pi_old = pi): the logged kl;
+    - its gradient, with the sampled tokens held fixed (as here: no gradient flows through
+      the draw), is in expectation the gradient of KL(pi_ref || pi), the other direction:
+      E_pi[grad D] = sum_a pi (1 - pi_ref / pi) grad log pi = -sum_a pi_ref grad log pi.
+      That is the direction of ppo_kl_cartpole.py's exact KL(pi_old || pi), with pi_ref for
+      pi_old (tests check it by exact enumeration). RLHF's KL in the reward, pushed by the
+      policy gradient through the draw, follows the gradient of KL(pi || pi_ref) instead.
     Averaged over each completion's own tokens (mask), then over completions; with
     length_norm=False, each completion's sum over the longest possible length (Dr. GRPO).
     The logged kl, clipfrac and ratio are the last epoch's, before its step."""
@@ -252,7 +287,7 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
     surrogate = torch.min(ratio * adv[:, None],
                           torch.clamp(ratio, 1 - cfg.clip_coef, 1 + cfg.clip_coef) * adv[:, None])
     log_ref_ratio = logp_ref - logp
-    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # k3 of KL(pi || pi_ref), per token
+    kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1  # D_t (k3) per token; see the docstring
     per_token = (surrogate - cfg.beta * kl) * mask
     length = mask.sum(1) if cfg.length_norm else torch.full_like(mask[:, 0], mask.shape[1])
     loss = -(per_token.sum(1) / length).mean()
@@ -284,7 +319,7 @@ def evaluate(model, pairs, cfg):
     return right.mean().item(), right.max(1).values.mean().item()
 
 
-def completions(model, cfg, held_out, n=6):
+def completions(model, cfg, held_out, n=8):
     """G completions of each of the first n held-out prompts, "x" after a wrong one."""
     P, L, gen = 2 * cfg.digits + 2, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed)
     lines = []
@@ -309,12 +344,27 @@ NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "len
 SMOKE = dict(digits=1, sft_steps=30, grpo_steps=10, eval_every=10, eval_prompts=10,
              n_layer=1, d_model=16)
 
+def saved_start(cfg):
+    """--start-from: the saved run's weights, refused in one line where its seed (and so its
+    held-out sums) or its model's shape differ from cfg's; read before the run folder is made."""
+    saved = checkpoints.load_checkpoint(cfg.start_from, script=SCRIPT,
+                                        required=("model", "config"))
+    for name in ("seed", "digits", "eval_prompts", "n_layer", "d_model", "n_head"):
+        flag, value = "--" + name.replace("_", "-"), saved["config"].get(name)
+        if value != getattr(cfg, name):
+            raise common.UserError(f"--start-from {cfg.start_from} was made with {flag} {value}, "
+                                   f"not {getattr(cfg, name)}: pass {flag} {value}")
+    return saved["model"]
+
+
 # ==== Training ============================================================================
 
 
 def train(cfg: Config):
-    """Supervise, then GRPO (or, with --control, supervise on). Returns a dict: run_dir,
-    before and after (held-out pass@1 and pass@G after each phase), interrupted."""
+    """Supervise, then GRPO (or, in its place, --rft or --more-labels). Returns a dict:
+    run_dir, before and after (held-out pass@1 and pass@G after each phase), reference (pi_ref,
+    the KL's anchor), interrupted."""
+    start = saved_start(cfg) if cfg.start_from else None
     torch.manual_seed(cfg.seed)  # the model's init
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
@@ -324,7 +374,8 @@ def train(cfg: Config):
     # The run folder: progress.csv, a progress line with these numbers every print_every steps
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     held = lambda n=len(held_out): evaluate(model, held_out[:n], cfg)  # noqa: E731
-    result = dict(run_dir=run.dir, before=None, after=None, samples={})
+    result = dict(run_dir=run.dir, before=None, after=None, samples={}, reference=None)
+    second = "rft" if cfg.rft else "more_labels" if cfg.more_labels else "grpo"  # phase 2's name
 
     def supervised_batch():  # prompt + answer, the answer's carry dropped in label_noise of them
         picks = rng.integers(0, len(train_pairs), cfg.sft_batch)
@@ -333,30 +384,56 @@ def train(cfg: Config):
                                     + answer_of(*train_pairs[i], cfg.digits, drop))
                              for i, drop in zip(picks, noisy)])
 
-    # Ctrl-C ends training; either way, model.pt is saved as training left it
+    def supervised_step(opt, seqs):  # one step of cross-entropy on whole answers
+        loss = sft_loss(model, seqs, P)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        return loss
+
+    # Ctrl-C ends training; either way, model.pt is saved as training left it. progress.csv
+    # numbers its rows on across the phases: the second phase's step k is row sft_steps + k.
     with run.saving_model(dict(model=model)):
         # --- supervised phase: imitate the labels, wrong ones included ---
-        opt, phase_start = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr), time.time()
-        for step in range(1, cfg.sft_steps + (cfg.control_steps if cfg.control else 0) + 1):
-            loss = sft_loss(model, supervised_batch(), P)
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
+        sft_steps = 0 if start else cfg.sft_steps
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr)
+        checks = []  # held-out pass@1 (100 sums) every eval_every steps
+        for step in range(1, sft_steps + 1):
+            loss = supervised_step(opt, supervised_batch())
             run.global_step = step
-            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are None
+            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
+                checks.append(held(100)[0])
+                run.update(dict(NO_GRPO, loss=loss.item(), pass1=checks[-1]), show=True)
+        last = checks[-1 - RISE_CHECKS:]  # the last checks and the one before them
+        if (len(last) > RISE_CHECKS and all(b > a for a, b in zip(last, last[1:]))
+                and last[-1] - last[0] > STILL_RISING):
+            # pass@1 sits near 0 for a while, then rises fast; how long it sits differs by seed
+            print(f"note: held-out pass@1 was still rising when supervision ended ("
+                  f"{last[0]:.2f} -> {last[-1]:.2f} over its last "
+                  f"{RISE_CHECKS * cfg.eval_every} steps): the supervised phase ended partway; "
+                  "more --sft-steps lets it finish (docs/ppo_to_grpo.md)", flush=True)
+        if start:
+            model.load_state_dict(start)  # --start-from: a supervised model saved before
+        result["before"] = held()  # what GRPO (or a baseline) starts from
+        result["samples"]["before"] = completions(model, cfg, held_out)
+        print(f"supervised{' (' + str(cfg.start_from) + ')' if start else ''}: held-out "
+              f"pass@1 {result['before'][0]:.3f}, pass@{cfg.group_size} {result['before'][1]:.3f}"
+              f" (phase supervised took {time.time() - run.start_time:.0f} s); next, {second}: "
+              f"progress rows from step {sft_steps + 1}", flush=True)
+        phase_start = time.time()
+
+        # --- the label control: more of the same supervision, never the verifier ---
+        for step in range(1, (cfg.more_labels_steps if cfg.more_labels else 0) + 1):
+            loss = supervised_step(opt, supervised_batch())
+            run.global_step = sft_steps + step
+            if step % cfg.eval_every == 0:
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
-            if step == cfg.sft_steps:
-                result["before"] = held()  # what GRPO (or the control) starts from
-                result["samples"]["before"] = completions(model, cfg, held_out)
-                print(f"supervised: held-out pass@1 {result['before'][0]:.3f}, "
-                      f"pass@{cfg.group_size} {result['before'][1]:.3f} (phase supervised "
-                      f"took {time.time() - run.start_time:.0f} s)", flush=True)
-                phase_start = time.time()
 
         # --- GRPO: sample a group per prompt, score it, push up the better completions ---
         reference = copy.deepcopy(model).requires_grad_(False)  # pi_ref, frozen: the KL's anchor
-        opt = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)
-        for step in range(1, (0 if cfg.control else cfg.grpo_steps) + 1):
+        result["reference"] = reference
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)  # --rft: the same
+        for step in range(1, (0 if cfg.more_labels else cfg.grpo_steps) + 1):
             picks = rng.integers(0, len(train_pairs), cfg.prompts)
             prompts = torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits)) for i in picks])
             seqs = sample(model, prompts.repeat_interleave(cfg.group_size, 0), L, gen)  # pi_old
@@ -366,28 +443,92 @@ def train(cfg: Config):
             mask = completion_mask(seqs[:, P:])  # the answer's tokens; the prompt is not learned
             with torch.no_grad():  # pi_old and pi_ref of every completion token, (B * G, L)
                 logp_old, logp_ref = token_logp(model, seqs, P), token_logp(reference, seqs, P)
-            for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
-                loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv, mask,
-                                       cfg)
-                opt.zero_grad()
-                loss.backward()
-                opt.step()
-            run.global_step = cfg.sft_steps + step
+            if cfg.rft:  # the baseline: the same samples and steps; imitate the right answers
+                kept = seqs[rewards > 0]  # a right answer is exactly L tokens: no padding
+                loss = None  # no right answer in the batch: no step, no loss
+                for _ in range(cfg.update_epochs if len(kept) else 0):
+                    loss = supervised_step(opt, kept)
+                k3 = torch.exp(logp_ref - logp_old) - (logp_ref - logp_old) - 1  # D, logged only
+                info = dict(kl=((k3 * mask).sum() / mask.sum()).item(), clipfrac=None,
+                            ratio=None)
+            else:
+                for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
+                    loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv,
+                                           mask, cfg)
+                    opt.zero_grad()
+                    loss.backward()
+                    opt.step()
+            run.global_step = sft_steps + step
             flat = (rewards.view(-1, cfg.group_size).std(1) == 0).float().mean().item()
             checked = step % (cfg.eval_every // 10) == 0
-            run.update(dict(loss=loss.item(), reward=rewards.mean().item(), flat_groups=flat,
+            loss = None if loss is None else loss.item()  # None: no step (RFT, no right answer)
+            run.update(dict(loss=loss, reward=rewards.mean().item(), flat_groups=flat,
                             kl=info["kl"], clipfrac=info["clipfrac"],
                             length=mask.sum(1).mean().item(),
-                            pass1=held(100)[0] if checked else None, ratio=info["ratio"]),
+                            pass1=held(100)[0] if checked else None)
+                       | ({} if info["ratio"] is None else dict(ratio=info["ratio"])),
                        show=checked)
         result["after"], result["samples"]["after"] = held(), completions(model, cfg, held_out)
-        print(f"after {'more supervision' if cfg.control else 'GRPO'}: held-out pass@1 "
-              f"{result['after'][0]:.3f}, pass@{cfg.group_size} {result['after'][1]:.3f} (phase "
-              f"{'control' if cfg.control else 'grpo'} took {time.time() - phase_start:.0f} s)",
+        print(f"after {second}: held-out pass@1 {result['after'][0]:.3f}, pass@{cfg.group_size} "
+              f"{result['after'][1]:.3f} (phase {second} took {time.time() - phase_start:.0f} s)",
               flush=True)
-    if not run.interrupted:  # curve.png and inside.png (--curves), TensorBoard (--tensorboard)
-        report.finish_grpo(run, result["samples"], cfg)
+    pictures(run, result["samples"], cfg, sft_steps)  # also after Ctrl-C: what was logged
     return dict(result, interrupted=run.interrupted)
+
+
+def pictures(run, samples, cfg, sft_steps):
+    """curve.png (--curves): each phase on its own steps, held-out pass@1 over both; the reward,
+    the KL to pi_ref and the groups without signal in GRPO's, the cross-entropy in a baseline's.
+    inside.png: the per-token ratio at three GRPO updates against the clip band, and held-out
+    sums' answers before and after (x: wrong). TensorBoard (--tensorboard). From progress.csv:
+    also after a Ctrl-C, what was logged."""
+    if not (run.dir / "progress.csv").exists():  # stopped before the first logged row
+        return
+    if cfg.tensorboard:
+        plots.to_tensorboard(run.dir)
+    if not cfg.curves:
+        return
+    baseline, plt = cfg.rft or cfg.more_labels, plots.pyplot()
+    log = plots.read_csv(run.dir / "progress.csv")
+    second = "RFT" if cfg.rft else "more labels" if cfg.more_labels else "GRPO"
+    x, checked = log["global_step"], np.isfinite(log["pass1"])
+    fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), gridspec_kw=dict(width_ratios=[1, 2]))
+    for column, (phase, steps) in enumerate((("supervised", x <= sft_steps),
+                                             (second, x > sft_steps))):
+        top, bottom = axes[:, column]  # each phase on its own step axis: GRPO's is shorter
+        if column == 1 and not cfg.more_labels:  # sampled answers: their reward, the KL
+            top.plot(x[steps], log["reward"][steps], lw=0.8, label=run.labels["reward"])
+            for key, color in (("kl", "C4"), ("flat_groups", "C7")):
+                bottom.plot(x[steps], log[key][steps], color=color, lw=0.8, label=run.labels[key])
+        if column == 0 or baseline:
+            bottom.plot(x[steps & checked], log["loss"][steps & checked], color="C1", lw=1,
+                        label="cross-entropy")
+        top.plot(x[steps & checked], log["pass1"][steps & checked], "o-", color="C3", ms=3,
+                 label=run.labels["pass1"])
+        top.set_title(phase, fontsize=9)
+        bottom.set_xlabel("step")
+        for ax in (top, bottom):
+            ax.legend(fontsize=7)
+    fig.suptitle(run.dir.name, fontsize=8)
+    with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+        print(f"curve: {plots.save_whole(plt, fig, run.dir / 'curve.png', dpi=90)}", flush=True)
+        fig = plt.figure(figsize=(12, 8))
+        grid = fig.add_gridspec(3, 3, hspace=0.5)
+        updates = [k for k in run.kept if "ratio" in k[1]]  # none in a baseline
+        for column, (update, step, arrays) in enumerate(plots.three_updates(updates)):
+            ax = fig.add_subplot(grid[0, column])
+            ax.hist(arrays["ratio"], bins=40, color="C0")
+            for v in (1 - cfg.clip_coef, 1 + cfg.clip_coef):
+                ax.axvline(v, color="k", ls="--", lw=0.8)
+            ax.set_title(f"per-token r = pi/pi_old, GRPO update {update}", fontsize=8)
+        for row, when in enumerate(("before", "after"), start=1):
+            ax = fig.add_subplot(grid[row, :])
+            ax.axis("off")
+            ax.set_title(f"{len(samples.get(when, []))} held-out sums, {cfg.group_size} sampled "
+                         f"answers each (x: wrong), {when} {second}", fontsize=9)
+            ax.text(0, 1, "\n".join(samples.get(when, [])), va="top", family="monospace",
+                    fontsize=8)
+        print(f"inside: {plots.save_whole(plt, fig, run.dir / 'inside.png', dpi=72)}", flush=True)
 
 
 def main(argv=None):
@@ -397,23 +538,25 @@ def main(argv=None):
         if not cfg.eval:
             result = train(cfg)
             if result["interrupted"]:
-                print(f"interrupted: {result['run_dir']} holds model.pt as training left it",
-                      flush=True)
+                print(f"interrupted: {result['run_dir']} holds model.pt as training left it, "
+                      "curve.png and inside.png of what was logged", flush=True)
                 raise SystemExit(130)
             return
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
-        run_cfg = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
+        fields = {f.name for f in dataclasses.fields(Config)}
+        run_cfg = Config(**{**{k: v for k, v in saved["config"].items() if k in fields},
+                            "eval": None, "gif": None, "start_from": None})  # its task, its split
         model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda c: TinyGPT(
             run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head,
             (2 * run_cfg.digits + 2) + (run_cfg.digits + 2)))  # prompt + answer tokens
         _, held_out = split_pairs(run_cfg.digits, run_cfg.eval_prompts,
                                   np.random.default_rng(run_cfg.seed))  # the run's own split
-        lines = completions(model, run_cfg, held_out, n=8)
+        lines = completions(model, run_cfg, held_out)
         print(f"{len(lines)} held-out prompts, each with {run_cfg.group_size} sampled answers "
-              "(. ends an answer):\n" + "\n".join(lines), flush=True)
+              "(. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
         pass1, passG = evaluate(model, held_out, run_cfg)
         print(f"held-out ({len(held_out)} prompts): pass@1 {pass1:.3f}, "
-              f"pass@{run_cfg.group_size} {passG:.3f}  (x: a wrong completion)", flush=True)
+              f"pass@{run_cfg.group_size} {passG:.3f}", flush=True)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,6 @@ seed -> (obs -> action)), ...], the first of which the checks, the GIFs and --gi
 """
 
 import time
-from dataclasses import asdict
 
 import numpy as np
 import torch
@@ -191,61 +190,3 @@ def play(cfg, path, env_id, ways, gif=GIF, watch=None):
               f"mean {np.mean(returns):.1f} ({what})", flush=True)
         first = returns if first is None else first
     return first
-
-
-def finish_grpo(run, samples, cfg):
-    """After GRPO's run: its pictures (draw_grpo) and TensorBoard, as asked."""
-    if cfg.curves:
-        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            draw_grpo(run, samples, cfg)
-    if cfg.tensorboard:
-        plots.to_tensorboard(run.dir)
-
-
-def draw_grpo(run, samples, cfg):
-    """GRPO's pictures. curve.png: the reward of the sampled completions, held-out pass@1, the
-    KL to pi_ref and the share of groups whose rewards are all equal (no signal), over the
-    steps. inside.png: the per-token ratio pi / pi_old at three GRPO updates against the
-    clip band, and held-out prompts' completions before and after GRPO (x: wrong)."""
-    plt, log = plots.pyplot(), plots.read_csv(run.dir / "progress.csv")
-    x, checked = log["global_step"], np.isfinite(log["pass1"])
-    fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), gridspec_kw=dict(width_ratios=[1, 2]))
-    second = "more supervision" if cfg.control else "GRPO"
-    for column, (phase, steps) in enumerate((("supervised", x <= cfg.sft_steps),
-                                             (second, x > cfg.sft_steps))):
-        top, bottom = axes[:, column]  # each phase on its own step axis: GRPO's is shorter
-        if not cfg.control and column == 1:
-            top.plot(x[steps], log["reward"][steps], color="C0", lw=0.8,
-                     label="reward of the samples")
-            bottom.plot(x[steps], log["kl"][steps], color="C4", lw=0.8,
-                        label="KL(pi || pi_ref), k3")
-            bottom.plot(x[steps], log["flat_groups"][steps], color="C7", lw=0.8,
-                        label="groups with equal rewards (no signal)")
-        else:
-            bottom.plot(x[steps & checked], log["loss"][steps & checked], color="C1", lw=1,
-                        label="cross-entropy")
-        top.plot(x[steps & checked], log["pass1"][steps & checked], "o-", color="C3", ms=3,
-                 label="held-out pass@1 (100 sums)")
-        top.set_title(phase, fontsize=9)
-        bottom.set_xlabel("step")
-        for ax in (top, bottom):
-            ax.legend(fontsize=7)
-    fig.suptitle(run.dir.name, fontsize=8)
-    fig.tight_layout()
-    print(f"curve: {plots.save_whole(plt, fig, run.dir / 'curve.png', dpi=90)}", flush=True)
-    fig = plt.figure(figsize=(12, 8))
-    grid = fig.add_gridspec(3, 3, hspace=0.5)
-    updates = [k for k in run.kept if "ratio" in k[1]]  # none with --control
-    for column, (update, step, arrays) in enumerate(plots.three_updates(updates) if updates else []):
-        ax = fig.add_subplot(grid[0, column])
-        ax.hist(arrays["ratio"], bins=40, color="C0")
-        for v in (1 - cfg.clip_coef, 1 + cfg.clip_coef):
-            ax.axvline(v, color="k", ls="--", lw=0.8)
-        ax.set_title(f"per-token r = pi/pi_old, GRPO update {update}", fontsize=8)
-    for row, when in enumerate(("before", "after"), start=1):
-        ax = fig.add_subplot(grid[row, :])
-        ax.axis("off")
-        ax.set_title(f"held-out prompts and {cfg.group_size} answers each (x: wrong), {when} "
-                     f"{'GRPO' if not cfg.control else 'more supervision'}", fontsize=9)
-        ax.text(0, 1, "\n".join(samples.get(when, [])), va="top", family="monospace", fontsize=8)
-    print(f"inside: {plots.save_whole(plt, fig, run.dir / 'inside.png', dpi=72)}", flush=True)

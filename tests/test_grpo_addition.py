@@ -82,6 +82,34 @@ def test_grpo_loss_by_hand():
 
 
 @pytest.mark.quick
+def test_k3_value_is_kl_pi_ref_but_its_gradient_is_kl_ref_pi():
+    """Exact enumeration on a 5-action categorical: grpo_loss's penalty alone (A = 0, beta = 1),
+    one one-token completion per action, weighted by pi with the samples held fixed (pi
+    detached, as the draw is). Its value is KL(pi || pi_ref); its gradient is that of
+    KL(pi_ref || pi), the direction of ppo_kl_cartpole.py's exact KL(pi_old || pi), and not
+    that of KL(pi || pi_ref), which the policy gradient of a KL in the reward follows."""
+    from torch.distributions import Categorical, kl_divergence
+
+    torch.manual_seed(0)
+    theta = torch.randn(5, dtype=torch.float64, requires_grad=True)
+    ref = torch.log_softmax(torch.randn(5, dtype=torch.float64), 0)
+    logp = torch.log_softmax(theta, 0)
+    cfg = grpo.Config(beta=1.0)
+    one = torch.ones(1, 1, dtype=torch.float64)
+    penalty = [grpo.grpo_loss(logp[a].view(1, 1), logp[a].detach().view(1, 1), ref[a].view(1, 1),
+                              torch.zeros(1, dtype=torch.float64), one, cfg)[0]
+               for a in range(5)]  # with A = 0 the loss is beta * D_a, per action
+    expected = (logp.exp().detach() * torch.stack(penalty)).sum()  # E_{a ~ pi}[D_a]
+    pi, pi_ref = Categorical(logits=logp), Categorical(logits=ref)
+    assert expected.item() == pytest.approx(kl_divergence(pi, pi_ref).item(), rel=1e-9)
+    grad, = torch.autograd.grad(expected, theta, retain_graph=True)
+    reverse, = torch.autograd.grad(kl_divergence(pi_ref, pi), theta, retain_graph=True)
+    forward, = torch.autograd.grad(kl_divergence(pi, pi_ref), theta)
+    assert torch.allclose(grad, reverse, atol=1e-12)
+    assert not torch.allclose(grad, forward, atol=1e-3)
+
+
+@pytest.mark.quick
 def test_token_logp_reads_the_completion_tokens_only():
     torch.manual_seed(0)
     model = grpo.TinyGPT(1, 16, 2, 8)
@@ -105,6 +133,116 @@ def test_a_tiny_run_in_process(tmp_path):
                                     print_every=10**6, run_dir=str(tmp_path)))
     assert 0 <= result["before"][0] <= result["before"][1] <= 1 and result["after"] is not None
     assert (result["run_dir"] / "model.pt").exists()
+
+
+@pytest.mark.quick
+def test_the_kl_anchor_is_the_frozen_supervised_model(tmp_path):
+    """pi_ref is the model as supervision left it, and stays so through GRPO: the same seed's
+    run with no GRPO step saves exactly that model. A reference that moves with the policy
+    (the same object, or a copy taken again later) would make the KL measure nothing."""
+    small = dict(digits=1, sft_steps=30, eval_every=10, eval_prompts=10, n_layer=1,
+                 d_model=16, curves=False, print_every=10**6)
+    supervised = grpo.train(grpo.Config(grpo_steps=0, run_dir=str(tmp_path / "a"), **small))
+    saved = torch.load(supervised["run_dir"] / "model.pt", weights_only=True)["model"]
+    result = grpo.train(grpo.Config(grpo_steps=10, run_dir=str(tmp_path / "b"), **small))
+    reference = result["reference"].state_dict()
+    assert reference.keys() == saved.keys()
+    for name, weight in saved.items():
+        assert torch.equal(reference[name], weight), name
+    trained = torch.load(result["run_dir"] / "model.pt", weights_only=True)["model"]
+    assert any(not torch.equal(trained[k], saved[k]) for k in saved)  # GRPO moved the policy
+    assert not any(p.requires_grad for p in result["reference"].parameters())
+
+
+TINY = dict(digits=1, sft_steps=100, sft_lr=1e-2, grpo_steps=10, eval_every=100, eval_prompts=10,
+            n_layer=1, d_model=16, curves=False, print_every=10**6)
+
+
+def recorded_second_phase(monkeypatch, tmp_path, **arm):
+    """A tiny run of one arm, recording what its second phase samples (the prompts and the
+    answers of each batch of B * G), the batches it imitates, and its optimizers' steps."""
+    seen = dict(prompts=[], answers=[], imitated=[], steps=[])
+    sample, sft_loss = grpo.sample, grpo.sft_loss
+
+    def recording_sample(model, prompts, n_new, generator):
+        seqs = sample(model, prompts, n_new, generator)
+        if len(prompts) == 32 * 8:  # a training batch, B * G (the checks sample fewer)
+            seen["prompts"].append(prompts.clone())
+            seen["answers"].append(seqs.clone())
+        return seqs
+
+    def recording_sft_loss(model, seqs, P):
+        if seen["prompts"]:  # after the first sampled batch: the second phase
+            seen["imitated"].append(seqs.clone())
+        return sft_loss(model, seqs, P)
+
+    class CountingAdam(torch.optim.Adam):
+        def step(self, *a, **k):
+            seen["steps"].append(self.defaults["lr"])
+            return super().step(*a, **k)
+
+    monkeypatch.setattr(grpo, "sample", recording_sample)
+    monkeypatch.setattr(grpo, "sft_loss", recording_sft_loss)
+    monkeypatch.setattr(grpo.torch.optim, "Adam", CountingAdam)
+    grpo.train(grpo.Config(run_dir=str(tmp_path), **TINY, **arm))
+    monkeypatch.undo()
+    return seen
+
+
+@pytest.mark.quick
+def test_rft_sees_what_grpo_sees_and_imitates_only_verified_answers(monkeypatch, tmp_path):
+    """The fair baseline's budget: the same prompts, batch by batch, the same number of
+    sampled answers, as many steps with the same optimizer and step size; what it imitates
+    is exactly each batch's answers that the verifier accepts."""
+    g = recorded_second_phase(monkeypatch, tmp_path / "grpo")
+    r = recorded_second_phase(monkeypatch, tmp_path / "rft", rft=True)
+    cfg = grpo.Config(**TINY)
+    assert len(g["prompts"]) == len(r["prompts"]) == cfg.grpo_steps
+    assert all(torch.equal(a, b) for a, b in zip(g["prompts"], r["prompts"]))
+    assert [len(a) for a in g["answers"]] == [len(a) for a in r["answers"]]
+    second = lambda steps: steps[cfg.sft_steps:]  # noqa: E731
+    P = 2 * cfg.digits + 2
+    right = [[s for s in batch.tolist() if grpo.reward(grpo.decode(s[:P]), grpo.decode(s[P:]),
+                                                       cfg.digits)] for batch in r["answers"]]
+    assert second(g["steps"]) == [cfg.learning_rate] * cfg.grpo_steps * cfg.update_epochs
+    assert second(r["steps"]) == [cfg.learning_rate] * sum(map(bool, right)) * cfg.update_epochs
+    imitated = [batch.tolist() for batch in r["imitated"]]
+    assert imitated == [batch for batch in right for _ in range(cfg.update_epochs)]
+    assert sum(0 < len(batch) < len(answers) for batch, answers in zip(right, r["answers"])) >= 5
+
+
+@pytest.mark.quick
+def test_start_from_begins_at_the_saved_supervised_model(tmp_path):
+    """--start-from: the arms of one seed start from one supervised model (benchmarks/
+    grpo_seeds.py); a run of another seed (other held-out sums) is refused before a folder."""
+    small = dict(TINY, grpo_steps=0, sft_steps=30)
+    supervised = grpo.train(grpo.Config(run_dir=str(tmp_path / "sft"), **small))
+    again = grpo.train(grpo.Config(run_dir=str(tmp_path / "arm"), start_from=str(
+        supervised["run_dir"]), **dict(small, sft_steps=7)))  # its own sft_steps are not run
+    assert again["before"] == supervised["after"]
+    with pytest.raises(grpo.common.UserError, match="was made with --seed 0, not 1"):
+        grpo.train(grpo.Config(run_dir=str(tmp_path / "other"), seed=1,
+                               start_from=str(supervised["run_dir"]), **small))
+    assert not (tmp_path / "other").exists()
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("checks,noted", [
+    ((0.03, 0.07, 0.10, 0.25, 0.34, 0.38), True),  # seed 8's last six checks, rounded
+    ((0.69, 0.69, 0.71, 0.62, 0.71, 0.73), False),  # seed 7's: risen long before, and noise
+    ((0.07, 0.07, 0.08, 0.72, 0.71, 0.73), False)])  # seed 9's: risen late, then level
+def test_a_supervised_phase_that_ends_mid_rise_is_noted(checks, noted, monkeypatch, capsys,
+                                                        tmp_path):
+    """Held-out pass@1 sits near 0, then rises fast, at a step that differs by seed: where the
+    last check is still well above the one before, the run says the phase ended partway."""
+    seen = iter(checks)
+    monkeypatch.setattr(grpo, "evaluate", lambda model, pairs, cfg: (next(seen, 0.5), 0.9))
+    grpo.train(grpo.Config(**dict(TINY, sft_steps=60, eval_every=10, grpo_steps=0,
+                                  run_dir=str(tmp_path))))  # checks at steps 10, 20, ... 60
+    out = capsys.readouterr().out
+    assert ("note: held-out pass@1 was still rising" in out) == noted, out
+    if noted:
+        assert "(0.10 -> 0.38 over its last 30 steps)" in out and "--sft-steps" in out
 
 
 def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
@@ -135,7 +273,10 @@ def test_same_seed_same_log(tmp_path):
 
 @pytest.mark.parametrize("args,needle", [(["--group-size", "1"], "--group-size must be > 1"),
                                          (["--d-model", "30"], "multiple of --n-head"),
-                                         (["--label-noise", "2"], "--label-noise must be in [0, 1]")])
+                                         (["--label-noise", "2"], "--label-noise must be in [0, 1]"),
+                                         (["--cuda"], "no GPU code"),
+                                         (["--rft", "--more-labels"], "pass one"),
+                                         (["--start-from", "nowhere"], "no checkpoint at")])
 def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
     p = run_script("grpo_addition.py", *args, "--run-dir", tmp_path, timeout=60)
     assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
@@ -147,10 +288,13 @@ def test_help_leaves_out_the_shared_flags_that_play_an_env(capsys):
     --watch, --gif); given anyway, --watch gets one line saying why (not a hint to use --gif)."""
     with pytest.raises(SystemExit):
         grpo.cli.parse_config(grpo.Config, ["--help"])
-    shown = capsys.readouterr().out
+    shown = " ".join(capsys.readouterr().out.split())  # argparse wraps the help at any word
     assert "--eval-seed" in shown and "--run-dir" in shown
-    for flag in ("--gifs", "--eval-episodes", "--watch", "--gif "):
+    for flag in ("--gifs", "--eval-episodes", "--watch", "--gif ", "--cuda"):
         assert flag not in shown, flag
+    for words in ("evaluation env", "play it"):  # the shared help, written for an env
+        assert words not in shown, words
+    assert "held-out pass@1 and pass@G" in shown and "--rft" in shown
     with pytest.raises(SystemExit) as stop:
         grpo.cli.parse_config(grpo.Config, ["--watch"])
     err = capsys.readouterr().err
@@ -165,5 +309,31 @@ def test_ctrl_c_keeps_the_model(tmp_path):
                                "--print-every", 1, "--run-dir", tmp_path, after="step     30")
     assert code == 130, err
     (run,) = tmp_path.iterdir()
-    assert (run / "model.pt").exists() and not list(run.glob("*.tmp"))
-    assert "model.pt as training left it" in out
+    assert {f.name for f in run.iterdir()} >= {"model.pt", "progress.csv", "curve.png",
+                                                 "inside.png"}
+    assert not list(run.glob("*.tmp"))
+    assert "model.pt as training left it, curve.png and inside.png" in out
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("page,seeds", [("docs/ppo_to_grpo.md", "It covers {} seeds"),
+                                        ("docs/ppo_to_grpo.zh-CN.md", "覆盖了 {} 个种子")])
+def test_the_pages_tables_are_the_records(page, seeds):
+    """The three arms' table on the GRPO page, both languages: every number, in order, is
+    what benchmarks/grpo_seeds.py computes from its committed record, and the page says how
+    many seeds that is."""
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(grpo.__file__).parent
+    spec = importlib.util.spec_from_file_location("grpo_seeds", root / "benchmarks" / "grpo_seeds.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    rows, text = bench.read_record(), (root / page).read_text(encoding="utf-8")
+    assert rows, "no record"
+    at = 0
+    for cells in bench.table_rows(rows):
+        tail = " | ".join(cells) + " |"
+        assert text.find(tail, at) > at, f"{page}: not found after the row before: {tail}"
+        at = text.find(tail, at)
+    assert seeds.format(len(rows)) in text
