@@ -360,6 +360,31 @@ def saved_start(cfg):
 # ==== Training ============================================================================
 
 
+def rft_steps(supervised_step, opt, seqs, rewards, logp_old, logp_ref, mask, cfg):
+    """--rft, the baseline: on GRPO's own samples, update_epochs supervised steps on the
+    answers the verifier accepts (none accepted: no step, no loss). The KL to pi_ref (k3) is
+    logged only. Returns (the last loss or None, GRPO's info without a ratio)."""
+    kept = seqs[rewards > 0]  # a right answer is exactly L tokens: no padding
+    loss = None
+    for _ in range(cfg.update_epochs if len(kept) else 0):
+        loss = supervised_step(opt, kept)
+    k3 = torch.exp(logp_ref - logp_old) - (logp_ref - logp_old) - 1  # D, logged only
+    return loss, dict(kl=((k3 * mask).sum() / mask.sum()).item(), clipfrac=None, ratio=None)
+
+
+def note_if_still_rising(checks, cfg):
+    """Say so when held-out pass@1 rose at each of the supervised phase's last RISE_CHECKS
+    checks, by more than STILL_RISING in all: pass@1 sits near 0 for a while, then rises fast,
+    and how long it sits differs by seed (docs/ppo_to_grpo.md)."""
+    last = checks[-1 - RISE_CHECKS:]  # the last checks and the one before them
+    if (len(last) > RISE_CHECKS and all(b > a for a, b in zip(last, last[1:]))
+            and last[-1] - last[0] > STILL_RISING):
+        print(f"note: held-out pass@1 was still rising when supervision ended ({last[0]:.2f} "
+              f"-> {last[-1]:.2f} over its last {RISE_CHECKS * cfg.eval_every} steps): the "
+              "supervised phase ended partway; more --sft-steps lets it finish "
+              "(docs/ppo_to_grpo.md)", flush=True)
+
+
 def train(cfg: Config):
     """Supervise, then GRPO (or, in its place, --rft or --more-labels). Returns a dict:
     run_dir, before and after (held-out pass@1 and pass@G after each phase), reference (pi_ref,
@@ -371,8 +396,7 @@ def train(cfg: Config):
     train_pairs, held_out = split_pairs(cfg.digits, cfg.eval_prompts, rng)
     P, L = 2 * cfg.digits + 2, cfg.digits + 2  # prompt and answer lengths, in tokens
     model = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
-    # The run folder: progress.csv, a progress line with these numbers every print_every steps
-    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")  # progress.csv
     held = lambda n=len(held_out): evaluate(model, held_out[:n], cfg)  # noqa: E731
     result = dict(run_dir=run.dir, before=None, after=None, samples={}, reference=None)
     second = "rft" if cfg.rft else "more_labels" if cfg.more_labels else "grpo"  # phase 2's name
@@ -401,17 +425,10 @@ def train(cfg: Config):
         for step in range(1, sft_steps + 1):
             loss = supervised_step(opt, supervised_batch())
             run.global_step = step
-            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are nan
+            if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are None
                 checks.append(held(100)[0])
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=checks[-1]), show=True)
-        last = checks[-1 - RISE_CHECKS:]  # the last checks and the one before them
-        if (len(last) > RISE_CHECKS and all(b > a for a, b in zip(last, last[1:]))
-                and last[-1] - last[0] > STILL_RISING):
-            # pass@1 sits near 0 for a while, then rises fast; how long it sits differs by seed
-            print(f"note: held-out pass@1 was still rising when supervision ended ("
-                  f"{last[0]:.2f} -> {last[-1]:.2f} over its last "
-                  f"{RISE_CHECKS * cfg.eval_every} steps): the supervised phase ended partway; "
-                  "more --sft-steps lets it finish (docs/ppo_to_grpo.md)", flush=True)
+        note_if_still_rising(checks, cfg)
         if start:
             model.load_state_dict(start)  # --start-from: a supervised model saved before
         result["before"] = held()  # what GRPO (or a baseline) starts from
@@ -444,13 +461,8 @@ def train(cfg: Config):
             with torch.no_grad():  # pi_old and pi_ref of every completion token, (B * G, L)
                 logp_old, logp_ref = token_logp(model, seqs, P), token_logp(reference, seqs, P)
             if cfg.rft:  # the baseline: the same samples and steps; imitate the right answers
-                kept = seqs[rewards > 0]  # a right answer is exactly L tokens: no padding
-                loss = None  # no right answer in the batch: no step, no loss
-                for _ in range(cfg.update_epochs if len(kept) else 0):
-                    loss = supervised_step(opt, kept)
-                k3 = torch.exp(logp_ref - logp_old) - (logp_ref - logp_old) - 1  # D, logged only
-                info = dict(kl=((k3 * mask).sum() / mask.sum()).item(), clipfrac=None,
-                            ratio=None)
+                loss, info = rft_steps(supervised_step, opt, seqs, rewards, logp_old, logp_ref,
+                                       mask, cfg)
             else:
                 for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
                     loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv,
@@ -461,10 +473,9 @@ def train(cfg: Config):
             run.global_step = sft_steps + step
             flat = (rewards.view(-1, cfg.group_size).std(1) == 0).float().mean().item()
             checked = step % (cfg.eval_every // 10) == 0
-            loss = None if loss is None else loss.item()  # None: no step (RFT, no right answer)
-            run.update(dict(loss=loss, reward=rewards.mean().item(), flat_groups=flat,
-                            kl=info["kl"], clipfrac=info["clipfrac"],
-                            length=mask.sum(1).mean().item(),
+            run.update(dict(loss=None if loss is None else loss.item(),  # None: RFT, no step
+                            reward=rewards.mean().item(), flat_groups=flat, kl=info["kl"],
+                            clipfrac=info["clipfrac"], length=mask.sum(1).mean().item(),
                             pass1=held(100)[0] if checked else None)
                        | ({} if info["ratio"] is None else dict(ratio=info["ratio"])),
                        show=checked)

@@ -170,7 +170,6 @@ class Config(cli.CheckpointFlags):
             self, total_timesteps="> 0", batch_size="> 0", hidden="> 0", buffer_size="> 0",
             eval_every="> 0", actor_lr="> 0", critic_lr="> 0", alpha_lr="> 0",
             gamma="(0, 1]", tau="(0, 1]", alpha="> 0 or none")
-        # The first update samples batch_size transitions: the warm-up must have stored that many.
         cli.check(self.start_steps >= self.batch_size,
                   f"--start-steps must be at least --batch-size ({self.batch_size}), "
                   f"got {self.start_steps}")
@@ -372,12 +371,10 @@ def train(cfg: Config):
     # H_target: -dim(A) unless set (Haarnoja et al. 2018b, table 1)
     target_entropy = -act_dim if cfg.target_entropy is None else cfg.target_entropy
     obs, _ = env.reset(seed=cfg.seed)
-    # The run folder: episodes.csv, evaluations.csv, a progress line every print_every steps
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every,
                                shipped=SHIPPED if cfg.env_id == "Walker2d-v5" else None)
-    actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
-    # checkpoint.pt holds the state_dict() of each of these: all that decides what comes next.
-    # --resume puts each back, and the run goes on exactly as if it had never stopped.
+    info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
+    # checkpoint.pt: each one's state_dict(), all that decides what comes next (--resume: exact)
     in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
                          rng=checkpoints.RandomState(env, device), log=run)
     first_step = 0
@@ -428,8 +425,7 @@ def train(cfg: Config):
                     global_step, returns, q_estimate=q, discounted_return=g, q_states=n,
                     entropy=entropy.item(), target_entropy=float(target_entropy),
                     alpha=nets["temperature"]().item())
-                report.after_evaluation(run, actor, best, device, actor_info, PICTURES,
-                                        mujoco_env.GIF)  # model.pt, best.pt, the pictures
+                report.after_evaluation(run, actor, best, device, info, PICTURES, mujoco_env.GIF)
             if (global_step % cfg.checkpoint_every == 0 or global_step == cfg.total_timesteps
                     or ctrl_c.pressed):  # (a larger --total-timesteps can extend a run)
                 checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
@@ -440,7 +436,7 @@ def train(cfg: Config):
     env.close()
     # model.pt: the actor training ended with; how to go on, or before.gif and after.gif
     return report.finish_evaluations(run, global_step, ctrl_c.pressed, untrained, actor, device,
-                                     actor_info, mujoco_env.GIF)
+                                     info, mujoco_env.GIF)
 
 
 def main(argv=None):

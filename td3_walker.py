@@ -142,7 +142,6 @@ class Config(cli.CheckpointFlags):
             eval_every="> 0", actor_lr="> 0", critic_lr="> 0", expl_noise=">= 0",
             gamma="(0, 1]", tau="(0, 1]", policy_delay="> 0", target_noise=">= 0",
             noise_clip=">= 0")
-        # The first update samples batch_size transitions: the warm-up must have stored that many.
         cli.check(self.start_steps >= self.batch_size,
                   f"--start-steps must be at least --batch-size ({self.batch_size}), "
                   f"got {self.start_steps}")
@@ -282,8 +281,7 @@ def build(obs_dim, act_dim, low, high, cfg, device):
 # An evaluation's own columns in evaluations.csv, once: (progress-line format, picture label)
 LOGGED = dict(q_estimate=(None, "critic: Q(s, mu(s))"), q_states=(None, "states averaged"),
               discounted_return=(None, "what mu obtained: sum of gamma^k r from s"))
-PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="at each "
-                                     "evaluation, over its states (docs/inside.md; TD3 Fig. 1)")]])
+PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="docs/inside.md")]])
 SHIPPED = Path(__file__).resolve().parent / "docs" / f"{SCRIPT}2d.pt"  # a 1M-step run's best
 SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,  # the tests':
              eval_every=150, eval_episodes=1, batch_size=64, hidden=64)  # seconds, every file
@@ -314,12 +312,10 @@ def train(cfg: Config):
     high_t = torch.as_tensor(high, dtype=torch.float32, device=device)
     half_width = torch.as_tensor((high - low) / 2, dtype=torch.float32, device=device)
     obs, _ = env.reset(seed=cfg.seed)
-    # The run folder: episodes.csv, evaluations.csv, a progress line every print_every steps
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every,
                                shipped=SHIPPED if cfg.env_id == "Walker2d-v5" else None)
-    actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
-    # checkpoint.pt holds the state_dict() of each of these: all that decides what comes next;
-    # --resume puts each back, and the run goes on exactly as if it had never stopped.
+    info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
+    # checkpoint.pt: each one's state_dict(), all that decides what comes next (--resume: exact)
     in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
                          rng=checkpoints.RandomState(env, device), log=run)
     first_step = 0
@@ -368,8 +364,7 @@ def train(cfg: Config):
                 q, g, n = common.q_against_return(seen, actor, nets["critic"], cfg.gamma, device)
                 best = run.evaluation(global_step, returns, q_estimate=q, discounted_return=g,
                                       q_states=n)  # a row of evaluations.csv
-                report.after_evaluation(run, actor, best, device, actor_info, PICTURES,
-                                        mujoco_env.GIF)  # model.pt, best.pt, the pictures
+                report.after_evaluation(run, actor, best, device, info, PICTURES, mujoco_env.GIF)
             if (global_step % cfg.checkpoint_every == 0 or global_step == cfg.total_timesteps
                     or ctrl_c.pressed):  # (a larger --total-timesteps can extend a run)
                 checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
@@ -380,7 +375,7 @@ def train(cfg: Config):
     env.close()
     # model.pt: the actor training ended with; how to go on, or before.gif and after.gif
     return report.finish_evaluations(run, global_step, ctrl_c.pressed, untrained, actor, device,
-                                     actor_info, mujoco_env.GIF)
+                                     info, mujoco_env.GIF)
 
 
 def main(argv=None):
