@@ -335,7 +335,7 @@ def build(obs_dim, act_dim, low, high, cfg, device):
                 critic_opt=critic_opt, alpha_opt=alpha_opt)
 
 
-# An evaluation's own columns in evaluations.csv, once: (progress-line format, picture label)
+# evaluations.csv's own columns, once: (progress-line format, picture label)
 LOGGED = dict(q_estimate=(None, "critic: Q1(s, tanh(mean))"), q_states=(None, "states averaged"),
               discounted_return=(None, "what pi obtained: sum of gamma^k r from s"),
               entropy=(None, "-mean log pi(a|s), last minibatch"), target_entropy=(None, "target"),

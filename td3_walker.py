@@ -278,7 +278,7 @@ def build(obs_dim, act_dim, low, high, cfg, device):
                 actor_opt=actor_opt, critic_opt=critic_opt)
 
 
-# An evaluation's own columns in evaluations.csv, once: (progress-line format, picture label)
+# evaluations.csv's own columns, once: (progress-line format, picture label)
 LOGGED = dict(q_estimate=(None, "critic: Q(s, mu(s))"), q_states=(None, "states averaged"),
               discounted_return=(None, "what mu obtained: sum of gamma^k r from s"))
 PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="docs/inside.md")]])
