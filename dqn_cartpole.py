@@ -94,7 +94,7 @@ class Config(cli.SolvedFlags):
     """transitions per gradient step (32 .. 256; Mnih et al.: 32)"""
     learning_rate: float = 5e-4
     """Adam step size (1e-4 .. 3e-3; rl-zoo: 2.3e-3, with which Q diverged once the target
-    was copied four times as often; 1e-3: the policy swung between good and bad)"""
+    was copied four times as often)"""
     gamma: float = 0.98
     """discount factor (0.98 .. 0.999); 0.98 looks about 50 steps ahead, enough to balance
     (rl-zoo: 0.99, whose Q of up to 100 takes longer to build)"""
@@ -149,8 +149,7 @@ FLAGS_ZH = dict(  # --help-zh's Chinese line of each of its flags (help_zh.py)
     learning_starts="开头多少步用均匀随机的动作，先把回放缓冲区填起来，再开始学习（至少等于 batch_size）",
     buffer_size="回放缓冲区的容量；存满后覆盖最旧的转移",
     batch_size="每个梯度步取多少条转移（32 到 256；Mnih 等：32）",
-    learning_rate="Adam 的学习率（1e-4 到 3e-3；rl-zoo 用 2.3e-3，目标网络复制的频率提高到四倍时 Q 发散了；"
-                  "1e-3 时策略时好时坏）",
+    learning_rate="Adam 的学习率（1e-4 到 3e-3；rl-zoo 用 2.3e-3，目标网络复制的频率提高到四倍时 Q 发散了）",
     gamma="折扣因子（0.98 到 0.999）；0.98 大约往前看 50 步，保持平衡够用了（rl-zoo：0.99，"
           "Q 要长到 100 左右，花的时间更长）",
     train_freq="两次学习之间走多少个环境步（Mnih 等：4）",
