@@ -7,7 +7,7 @@ network are DDPG's (ddpg_walker.py) for discrete actions: the target copies the 
 every target_update_interval gradient steps instead of following it softly. The loop in
 train(), top to bottom:
 
-    act      random for learning_starts steps, then epsilon-greedy, epsilon falling linearly
+    act      random for start_steps steps, then epsilon-greedy, epsilon falling linearly
     store    (s, a, r, s', terminated) in the replay buffer; a time-limit truncation is NOT
              terminal, so its target still bootstraps
     learn    every train_freq env steps, gradient_steps minibatch steps on the Huber loss
@@ -84,9 +84,9 @@ class Config(cli.SolvedFlags):
     """seeds torch, numpy's draws and the env: same seed, same machine => same progress.csv"""
     total_timesteps: int = 100_000
     """budget of env steps (rl-zoo: 50000); training stops when solved"""
-    learning_starts: int = 1000
+    start_steps: int = 1000
     """uniformly random actions for this many steps, which fill the buffer before learning
-    starts (at least batch_size)"""
+    starts (at least batch_size; DDPG's name; rl-zoo's learning_starts: 1000)"""
     # --- DQN ---
     buffer_size: int = 100_000
     """replay buffer capacity; the oldest transitions are overwritten"""
@@ -134,19 +134,20 @@ class Config(cli.SolvedFlags):
             target_update_interval="> 0", eps_start="[0, 1]", eps_end="[0, 1]",
             exploration_steps="> 0", max_grad_norm=">= 0", q_check_every="> 0")
         # The first learning phase samples batch_size transitions: the warm-up must store them.
-        cli.check(self.learning_starts >= self.batch_size,
-                  f"--learning-starts must be at least --batch-size ({self.batch_size}), "
-                  f"got {self.learning_starts}")
-        cli.check(self.total_timesteps > self.learning_starts,
-                  f"--total-timesteps ({self.total_timesteps}) must exceed --learning-starts "
-                  f"({self.learning_starts}): learning starts after the warm-up")
+        cli.check(self.start_steps >= self.batch_size,
+                  f"--start-steps must be at least --batch-size ({self.batch_size}), "
+                  f"got {self.start_steps}")
+        cli.check(self.total_timesteps > self.start_steps,
+                  f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
+                  f"({self.start_steps}): learning starts after the warm-up")
 
 
 FLAGS_ZH = dict(  # --help-zh's Chinese line of each of its flags (help_zh.py)
     env_id="gymnasium 的环境名，观测是 Box、动作是 Discrete",
     seed="随机种子，决定 torch、numpy 的随机数和环境：同一个种子、同一台机器，progress.csv 完全相同",
     total_timesteps="环境步数的预算（rl-zoo：50000）；解决了就停下",
-    learning_starts="开头多少步用均匀随机的动作，先把回放缓冲区填起来，再开始学习（至少等于 batch_size）",
+    start_steps="开头多少步用均匀随机的动作，先把回放缓冲区填起来，再开始学习（至少等于 batch_size；"
+                "名字和 DDPG 的一样；rl-zoo 的 learning_starts：1000）",
     buffer_size="回放缓冲区的容量；存满后覆盖最旧的转移",
     batch_size="每个梯度步取多少条转移（32 到 256；Mnih 等：32）",
     learning_rate="Adam 的学习率（1e-4 到 3e-3；rl-zoo 用 2.3e-3，目标网络复制的频率提高到四倍时 Q 发散了）",
@@ -272,7 +273,7 @@ LOGGED = dict(epsilon=(".3f", "epsilon", "charts/epsilon"),
               next_double=(None, "Q'(s', argmax_a Q(s', a)): Double DQN's pick"),
               q_greedy=(".1f", "Q(s, argmax Q): the network's estimate"),
               mc_return=(".1f", "what greedy obtained: sum of gamma^k r from s"))
-SMOKE = dict(total_timesteps=1200, learning_starts=200, train_freq=100, gradient_steps=4,
+SMOKE = dict(total_timesteps=1200, start_steps=200, train_freq=100, gradient_steps=4,
              q_check_every=2, stop_when_solved=False, eval_episodes=2)  # tests: seconds
 Q_CHECK = dict(episodes=2, max_episode_steps=1000)  # greedy episodes; longer than the limit's
 # 500, so that a policy that never falls still leaves 500 states far enough from its end
@@ -333,7 +334,7 @@ def train(cfg: Config):
             # --- act: random in the warm-up, then epsilon-greedy in Q ---
             obs = next_obs  # the action belongs to obs; next_obs is only where it led
             epsilon = epsilon_at(global_step, cfg)
-            if global_step <= cfg.learning_starts or rng.random() < epsilon:
+            if global_step <= cfg.start_steps or rng.random() < epsilon:
                 action = rng.integers(n_actions, size=1)
             else:
                 with torch.no_grad():
@@ -357,7 +358,7 @@ def train(cfg: Config):
                     break
 
             # --- learn: every train_freq steps, gradient_steps minibatch steps ---
-            if global_step <= cfg.learning_starts or global_step % cfg.train_freq:
+            if global_step <= cfg.start_steps or global_step % cfg.train_freq:
                 continue
             stats = []
             for _ in range(cfg.gradient_steps):

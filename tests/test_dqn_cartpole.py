@@ -109,7 +109,7 @@ def test_the_loop_stores_a_truncation_as_not_terminal_and_skips_the_reset_step(t
                  max_episode_steps=5, reward_threshold=475.0)
     stored = []
     monkeypatch.setattr(dqn.ReplayBuffer, "add", lambda self, *t: stored.append(t))
-    cfg = dqn.Config(env_id="CartPoleCutAt5-v1", total_timesteps=80, learning_starts=79,
+    cfg = dqn.Config(env_id="CartPoleCutAt5-v1", total_timesteps=80, start_steps=79,
                      stop_when_solved=False, gifs=False, curves=False, eval_episodes=1,
                      run_dir=str(tmp_path), print_every=10**6)
     dqn.train(cfg)
