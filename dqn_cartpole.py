@@ -16,9 +16,10 @@ train(), top to bottom:
     log      one progress.csv row per learning phase; now and then the greedy policy plays, so
              that Q(s, argmax Q) can be set against the return it really obtains (inside.png)
 Solved as the other CartPole scripts: the last 20 training episodes average 475, then the
-greedy policy as it is then must too.
+greedy policy as it is then must too. Not every seed gets there within the budget: DQN's
+policy swings between good and bad more than PPO's (benchmarks/results/dqn_cartpole_seeds.csv).
 
-    python dqn_cartpole.py                  # train until solved (a minute or so on a CPU)
+    python dqn_cartpole.py                  # train until solved, or 100k steps: minutes on a CPU
     python dqn_cartpole.py --double-q       # Double DQN: compare inside.png's Q with the return
     python dqn_cartpole.py --eval runs/latest --watch   # the greedy policy, in a window
 
@@ -27,7 +28,8 @@ greedy policy as it is then must too.
 只是目标网络每隔 target_update_interval 个梯度步整个复制一次（硬更新），而不是软更新。
 --double-q 是 Double DQN：由当前网络选下一个动作、目标网络给它估值，治的是 max 带来的高估；
 inside.png 把 Q(s, argmax Q) 和贪心策略从同一个状态出发实际得到的折扣回报画在一起，
-加不加 --double-q 各跑一次就能看到差别。TD3 的裁剪双 Q 学习就是从这里来的。
+加不加 --double-q 各跑一次，比较两张图（这里的默认设置下，CartPole 上两者差得不多）。
+TD3 的裁剪双 Q 学习就是从这里来的。
 """
 
 import copy
