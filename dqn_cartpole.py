@@ -1,5 +1,5 @@
 """DQN on CartPole-v1 (Mnih et al. 2015, "Human-level control through deep reinforcement
-learning"), and Double DQN as the named variant --double-q (van Hasselt et al. 2016).
+learning"), and Double DQN as the named variant --double (van Hasselt et al. 2016).
 
 Value-based control: no policy network, only Q(s, a); the policy is epsilon-greedy in Q
 while training and greedy, argmax_a Q(s, a), after it. The replay buffer and the target
@@ -20,15 +20,15 @@ greedy policy as it is then must too (seeds 0-4: at 35k to 56k steps,
 benchmarks/results/dqn_cartpole_seeds.csv).
 
     python dqn_cartpole.py                  # train until solved (about a minute on a CPU)
-    python dqn_cartpole.py --double-q       # Double DQN: compare inside.png's Q with the return
+    python dqn_cartpole.py --double       # Double DQN: compare inside.png's Q with the return
     python dqn_cartpole.py --eval runs/latest --watch   # the greedy policy, in a window
 
 中文导读：DQN（深度 Q 网络），基于价值的方法：没有策略网络，只学 Q(s, a)；训练时按 ε-贪心
 选动作，训练后贪心地选 argmax_a Q(s, a)。回放缓冲区和目标网络的写法和 ddpg_walker.py 一样，
 只是目标网络每隔 target_update_interval 个梯度步整个复制一次（硬更新），而不是软更新。
---double-q 是 Double DQN：由当前网络选下一个动作、目标网络给它估值，治的是 max 带来的高估；
+--double 是 Double DQN：由当前网络选下一个动作、目标网络给它估值，治的是 max 带来的高估；
 inside.png 把 Q(s, argmax Q) 和贪心策略从同一个状态出发实际得到的折扣回报画在一起，
-加不加 --double-q 各跑一次，比较两张图（这里的默认设置下，CartPole 上两者差得不多）。
+加不加 --double 各跑一次，比较两张图（这里的默认设置下，CartPole 上两者差得不多）。
 TD3 的裁剪双 Q 学习就是从这里来的。
 """
 
@@ -121,7 +121,7 @@ class Config(cli.SolvedFlags):
     """clip the gradient norm to this (SB3's DQN: 10; 0 = no clipping)"""
     hidden: int = 256
     """units in each of the two hidden layers (64 .. 256)"""
-    double_q: bool = False
+    double: bool = False
     """Double DQN (van Hasselt et al. 2016): the network picks the next action, the target
     network values it"""
     q_check_every: int = 10
@@ -166,7 +166,7 @@ FLAGS_ZH = dict(  # --help-zh's Chinese line of each of its flags (help_zh.py)
     exploration_steps="ε 在这么多个环境步内从 eps_start 线性降到 eps_end（rl-zoo：50000 步的 0.16）",
     max_grad_norm="梯度范数的上限（SB3 的 DQN：10；0 表示不限制）",
     hidden="两层隐藏层各有多少单元（64 到 256）",
-    double_q="Double DQN（van Hasselt 等 2016）：当前网络选下一个动作，目标网络给它估值",
+    double="Double DQN（van Hasselt 等 2016）：当前网络选下一个动作，目标网络给它估值",
     q_check_every="每隔多少次学习检查一次 Q 和回报（inside.png）：贪心策略玩 Q_CHECK 里定的几个回合",
     stop_when_solved="最近 solved_window 个结束的回合平均回报达到解决线，而且当时的贪心策略玩 "
                      "eval_episodes 个回合（环境种子 eval_seed + 1）也达到，就停下；每次学习最多检查一次",
@@ -256,7 +256,7 @@ def dqn_update(q_net, q_target, optimizer, batch, cfg):
     values of next_q (both measured, whichever the target used)."""
     obs, action, reward, next_obs, not_done = batch
     with torch.no_grad():  # the target is a constant: no gradient flows into it
-        value, greedy_max, double_q = next_q(q_net, q_target, next_obs, cfg.double_q)
+        value, greedy_max, double_q = next_q(q_net, q_target, next_obs, cfg.double)
         y = td_target(reward, not_done, value, cfg.gamma)
     loss, q = compute_loss_q(q_net, obs, action, y)
     optimizer.zero_grad()
@@ -281,26 +281,12 @@ Q_CHECK = dict(episodes=2, max_episode_steps=1000)  # greedy episodes; longer th
 # 500, so that a policy that never falls still leaves 500 states far enough from its end
 
 
-def measured(*columns, title):
-    """Panel: `columns` at the rows where they were measured, as points joined by lines."""
-    def fill(axes, logs):
-        ax, table = axes[0], logs["table"]
-        for i, column in enumerate(columns):
-            at = np.isfinite(table[column])
-            ax.plot(table["global_step"][at], table[column][at], "o-", ms=3, lw=1,
-                    color=f"C{i + 1}", label=logs["labels"][column])
-        ax.set(xlabel="env steps")
-        ax.set_title(title, fontsize=9)
-        ax.legend(fontsize=7, loc="upper left")
-    return 1, fill
-
-
 def pictures(cfg):
     """curve.png: epsilon and the loss; inside.png: the greedy policy's Q against its return
     from the same states, and the two next-state values on the minibatches."""
-    what = "Double DQN" if cfg.double_q else "DQN"
+    what = "Double DQN" if cfg.double else "DQN"
     return dict(curve=[[plots.lines("epsilon", right=("loss",))]], inside=[[
-        measured("q_greedy", "mc_return", title=f"{what}: the greedy policy's states"),
+        plots.lines("q_greedy", "mc_return", title=f"{what}: the greedy policy's states"),
         plots.lines("next_max", "next_double", title="the value of s' in the target, batch mean")]])
 
 
@@ -308,7 +294,7 @@ def pictures(cfg):
 
 
 def train(cfg: Config):
-    """Train DQN (or with cfg.double_q Double DQN) with `cfg`. Returns a dict: run_dir, solved,
+    """Train DQN (or with cfg.double Double DQN) with `cfg`. Returns a dict: run_dir, solved,
     solved_step, global_step, episode_returns, greedy_returns, interrupted (as
     report.finish_updates)."""
     # --- seeding and setup ---

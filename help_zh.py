@@ -29,18 +29,23 @@ def chinese_locale():
 def flags(script, module=None):
     """{field: its Chinese line} for `script` (its name), read from HELP_ZH's tables: a section
     whose heading names fewer scripts, `script` among them, wins over one naming more, and
-    every section wins over 所有脚本 (all scripts); the script's own FLAGS_ZH ({field: line},
-    if it has one: a new script needs no other file) wins over them all."""
+    every section wins over 所有脚本 (all scripts); a flag of no section naming `script` (a
+    new script: e.g. the solved rule's flags) takes the line of the section naming the most
+    scripts that has it; the script's own FLAGS_ZH ({field: line}, if it has one: a new
+    script needs no other file) wins over them all."""
     sections = []
     for line in HELP_ZH.read_text(encoding="utf-8").splitlines():
         if line.startswith("## "):
             sections.append((re.findall(r"`(\w+)\.py`", line), {}))
         elif sections and (row := re.match(r"\| `--([\w-]+)` \| (.+) \|$", line)):
             sections[-1][1][row[1].replace("-", "_")] = row[2]
-    found = {}
+    found, elsewhere = {}, {}
     for names, rows in sorted(sections, key=lambda s: (bool(s[0]), -len(s[0]))):
         if not names or script in names:
             found.update(rows)
+        for name, line in rows.items():  # a script not named yet: the shared flags' lines
+            elsewhere.setdefault(name, line)
+    found = {**elsewhere, **found}
     module = module or importlib.import_module(script)  # a script run as __main__: given
     return {**found, **getattr(module, "FLAGS_ZH", {})}
 

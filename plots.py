@@ -133,16 +133,24 @@ def lines(*columns, title=None, right=(), log=False, ylim=None, between=None, hl
           steps=False):
     """Panel: `columns` of the run's table over env steps, labelled as declared; `right`:
     more columns on a log-scaled right axis; `between`: (low, high, label) shaded; `hlines`:
-    dashed levels; `steps`: drawn as steps, each rise and fall marked."""
+    dashed levels; `steps`: drawn as steps, each rise and fall marked. A column measured only
+    at some rows (None elsewhere) is drawn at those rows, as points. A column the log lacks
+    stops the picture with a KeyError naming it."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
         x = table["global_step"]
+        missing = [c for c in (*columns, *right) if c not in table]
+        if missing:
+            raise KeyError(f"a panel draws {missing}, which the run's log lacks (columns: "
+                           f"{sorted(table)})")
         if between is not None:
             ax.axhspan(between[0], between[1], color="C2", alpha=0.2, label=between[2])
-        for i, column in enumerate(c for c in columns if c in table):
-            y = table[column]
-            ax.plot(x, y, color=f"C{i + 1}", lw=1,
-                    label=labels.get(column, column), drawstyle="steps-post" if steps else None)
+        for i, column in enumerate(columns):
+            y, at = table[column], np.isfinite(table[column])
+            sparse = 0 < at.sum() < len(at) and not steps  # measured at some rows only
+            ax.plot(x[at] if sparse else x, y[at] if sparse else y, "o-" if sparse else "-",
+                    ms=3, color=f"C{i + 1}", lw=1, label=labels.get(column, column),
+                    drawstyle="steps-post" if steps else None)
             if steps:  # the value the next row has: up or down from here
                 nxt = np.append(y[1:], np.nan)
                 for changed, marker, what in ((nxt > y, "^", "rises next"),
@@ -156,7 +164,7 @@ def lines(*columns, title=None, right=(), log=False, ylim=None, between=None, hl
         if title:
             ax.set_title(title, fontsize=9)
         ax.legend(fontsize=7, loc="upper left")
-        shown = [c for c in right if c in table]
+        shown = list(right)
         if shown:
             twin = ax.twinx()
             for column, color in zip(shown, ("C3", "C4", "C5")):

@@ -8,7 +8,7 @@ early stop at 1.5 x target_kl). The loop in train(), top to bottom:
     GAE      advantages A_t and value targets R_t = A_t + V(s_t)   (common.gae)
     update   a few epochs of shuffled minibatches on the clipped surrogate
     log      one progress.csv row per update; a progress line now and then
-After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_cartpole).
+After training: curve.png, inside.png, the evaluation, the GIFs (report.finish_updates).
 
     python ppo_cartpole.py                  # train until solved (tens of seconds on a CPU)
     python ppo_cartpole.py --eval runs/latest --watch   # replay a saved model in a window

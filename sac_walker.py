@@ -373,7 +373,7 @@ def train(cfg: Config):
     obs, _ = env.reset(seed=cfg.seed)
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every,
                                shipped=SHIPPED if cfg.env_id == "Walker2d-v5" else None)
-    info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
+    actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
     # checkpoint.pt: each one's state_dict(), all that decides what comes next (--resume: exact)
     in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
                          rng=checkpoints.RandomState(env, device), log=run)
@@ -425,7 +425,8 @@ def train(cfg: Config):
                     global_step, returns, q_estimate=q, discounted_return=g, q_states=n,
                     entropy=entropy.item(), target_entropy=float(target_entropy),
                     alpha=nets["temperature"]().item())
-                report.after_evaluation(run, actor, best, device, info, PICTURES, mujoco_env.GIF)
+                report.after_evaluation(run, actor, best, device, actor_info, PICTURES,
+                                        mujoco_env.GIF)  # model.pt, best.pt, the pictures
             if (global_step % cfg.checkpoint_every == 0 or global_step == cfg.total_timesteps
                     or ctrl_c.pressed):  # (a larger --total-timesteps can extend a run)
                 checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
@@ -436,7 +437,7 @@ def train(cfg: Config):
     env.close()
     # model.pt: the actor training ended with; how to go on, or before.gif and after.gif
     return report.finish_evaluations(run, global_step, ctrl_c.pressed, untrained, actor, device,
-                                     info, mujoco_env.GIF)
+                                     actor_info, mujoco_env.GIF)
 
 
 def main(argv=None):

@@ -47,12 +47,12 @@ def test_dqn_and_double_dqn_targets_by_hand(double, expected):
 
 @pytest.mark.quick
 def test_the_update_trains_on_the_chosen_target_and_leaves_the_target_network():
-    """With --double-q the update's target is the Double DQN one: after one SGD step of lr 1 on
+    """With --double the update's target is the Double DQN one: after one SGD step of lr 1 on
     a table, Q(s, a) = 1 moves toward that target by the Huber gradient (DQN: y = 3.5, clipped
     to a step of 1; Double DQN: y = 1.5, a step of 0.5), and Q' is untouched."""
     for double, y in ((False, 1 + 0.5 * 5), (True, 1 + 0.5 * 1)):
         q_net, q_target = Table([[3.0, 1.0], [1.0, 0.0]]), Table([[1.0, 5.0], [0.0, 0.0]])
-        cfg = dqn.Config(gamma=0.5, double_q=double, max_grad_norm=0)
+        cfg = dqn.Config(gamma=0.5, double=double, max_grad_norm=0)
         optimizer = torch.optim.SGD(q_net.parameters(), lr=1.0)
         # s = 1, a = 0, Q(s, a) = 1; s' = 0, not terminated
         batch = (torch.tensor([[1.0]]), torch.tensor([0]), torch.tensor([1.0]),

@@ -71,8 +71,8 @@ def words(tool):
     """A tool's code as (attribute names, string literals, every word of its text)."""
     text = (ROOT / f"{tool}.py").read_text(encoding="utf-8")
     tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))
-    attributes = {b.string for a, b in zip(tokens, tokens[1:])
-                  if a.string == "." and b.type == tokenize.NAME}
+    attributes = {c.string for a, b, c in zip(tokens, tokens[1:], tokens[2:])  # cfg.<field>
+                  if a.string in ("cfg", "config") and b.string == "." and c.type == tokenize.NAME}
     strings = {t.string.strip("'\"rbf") for t in tokens if t.type == tokenize.STRING}
     return attributes, strings, text
 
