@@ -182,11 +182,12 @@ def play(cfg, path, env_id, ways, gif=GIF, watch=None):
           + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
     first = None
     for i, (_, what, act_of) in enumerate(ways):
-        shown = cfg.watch and i == 0
+        window = cfg.watch and i == 0
         returns = common.evaluate(env_id, act_of(cfg.eval_seed), cfg.eval_episodes,
-                                  cfg.eval_seed, render_mode="human" if shown else None,
-                                  log=shown, **(watch(env_id) if shown and watch else {}))
-        print(f"{env_id}, {path}: returns {[round(r, 1) for r in returns]}, "
+                                  cfg.eval_seed, render_mode="human" if window else None,
+                                  log=window, **(watch(env_id) if window and watch else {}))
+        shown = [int(r) if float(r).is_integer() else round(r, 1) for r in returns]
+        print(f"{env_id}, {path}: returns {shown}, "
               f"mean {np.mean(returns):.1f} ({what})", flush=True)
         first = returns if first is None else first
     return first

@@ -59,15 +59,21 @@ def measured(ppo_update):
     return update_and_measure
 
 
+# The three numbers join what the script declares it logs (its LOGGED), for these runs only.
+MEASURED = dict(kl_after=(None, "KL(pi_old || pi) after the update"),
+                ratio_low=(None, "smallest ratio"), ratio_high=(None, "largest ratio"))
 VARIANTS = {
     "original: the clip (ppo_cartpole)": {
-        "swap": [(ppo_cartpole, "ppo_update", measured(ppo_cartpole.ppo_update))]},
+        "swap": [(ppo_cartpole, "ppo_update", measured(ppo_cartpole.ppo_update)),
+                 (ppo_cartpole, "LOGGED", {**ppo_cartpole.LOGGED, **MEASURED})]},
     "original: KL penalty (ppo_kl_cartpole)": {
         "script": ppo_kl_cartpole,
-        "swap": [(ppo_kl_cartpole, "ppo_update", measured(ppo_kl_cartpole.ppo_update))]},
+        "swap": [(ppo_kl_cartpole, "ppo_update", measured(ppo_kl_cartpole.ppo_update)),
+                 (ppo_kl_cartpole, "LOGGED", {**ppo_kl_cartpole.LOGGED, **MEASURED})]},
     "variant: no clip (L_CPI)": {
         "swap": [(ppo_cartpole, "compute_loss_pi", compute_loss_pi_without_clip),
-                 (ppo_cartpole, "ppo_update", measured(ppo_cartpole.ppo_update))]},
+                 (ppo_cartpole, "ppo_update", measured(ppo_cartpole.ppo_update)),
+                 (ppo_cartpole, "LOGGED", {**ppo_cartpole.LOGGED, **MEASURED})]},
 }
 PANELS = [("kl_after", "KL(pi_old || pi) after each update", True),
           ("ratio_high", "largest ratio after each update", True),

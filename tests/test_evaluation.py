@@ -53,7 +53,7 @@ def test_a_solved_run_stops_only_once_pi_as_it_is_now_holds(name, tmp_path, monk
     script = importlib.import_module(name)
     checks = []  # the env step of each check
 
-    def holds(net, device, cfg, threshold, step):
+    def holds(play, cfg, threshold, step):
         checks.append(step)
         return len(checks) == 3  # the first two checks find pi falling short
 
@@ -76,6 +76,7 @@ def test_the_check_plays_the_current_pi(name, capsys):
     torch.manual_seed(0)  # an init whose greedy policy falls at once (some balance for 500)
     net = (script.PolicyNetwork(4, 2, cfg.hidden) if hasattr(script, "PolicyNetwork")
            else (lambda model: lambda x: model(x)[0])(script.ActorCritic(4, 2, cfg.hidden)))
-    assert report.pi_holds(net, "cpu", cfg, 10, step=0)
-    assert not report.pi_holds(net, "cpu", cfg, 475, step=0)
+    play = report.sampled_and_greedy(net, "cpu")
+    assert report.pi_holds(play, cfg, 10, step=0)
+    assert not report.pi_holds(play, cfg, 475, step=0)
     assert "check at step 0: pi as it is now averages" in capsys.readouterr().out
