@@ -36,9 +36,9 @@ class OutputFlags:
     print_every: int = 10
     """print a progress line every this many updates"""
     gifs: bool = True
-    """write before.gif (untrained) and after.gif (trained) to the run folder, one episode each
-    (a policy over discrete actions: actions drawn from pi, as in training and in tutorial
-    004's GIFs)"""
+    """write before.gif (untrained) and after.gif (trained) to the run folder, one episode each,
+    acting as the script's first evaluation does (PPO and A2C: actions drawn from pi, as in
+    training and in tutorial 004's GIFs; DQN: the greedy action)"""
     curves: bool = True
     """draw curve.png (the learning curve) and inside.png (what the updates do inside the
     algorithm; docs/inside.md) in the run folder"""

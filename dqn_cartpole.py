@@ -126,7 +126,7 @@ class Config(cli.SolvedFlags):
     network values it"""
     q_check_every: int = 10
     """learning phases between the checks of Q against the return (inside.png): the greedy
-    policy plays Q_CHECK["episodes"] episodes"""
+    policy plays 2 episodes of at most 1000 steps (Q_CHECK)"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -157,17 +157,18 @@ FLAGS_ZH = dict(  # --help-zh's Chinese line of each of its flags (help_zh.py)
           "没有解决）",
     train_freq="两次学习之间走多少个环境步（Mnih 等：4）",
     gradient_steps="每次学习走几个小批量梯度步（Mnih 等：1）",
-    target_update_interval="每隔多少个梯度步把当前网络复制进目标网络（Mnih 等：10000；rl-zoo 的每 10 "
-                           "个环境步相当于 128，即每次学习复制一次）。每复制一次，Q 就多往前看一步，"
-                           "所以每次学习复制两次，Q 的增长快一倍；每 32 步复制一次时，Q 发散了",
+    target_update_interval="每隔多少个梯度步把当前网络复制进目标网络（Mnih 等：10000；rl-zoo 每 10 "
+                           "个环境步复制一次，换算成这里的梯度步约是 128，也就是每次学习复制一次）。"
+                           "每复制一次，Q 就多往前看一步，所以每次学习复制两次，Q 的增长快一倍；"
+                           "每 32 步复制一次时，Q 发散了",
     eps_start="ε-贪心在第 0 步的 ε",
-    eps_end="ε 衰减完以后的值，一直保持到训练结束（0.01 到 0.1；rl-zoo：0.04，它的随机动作让训练回合"
-            "（解决的规则平均的正是它们）远不如贪心策略）",
+    eps_end="ε 衰减完以后的值，一直保持到训练结束（0.01 到 0.1）。rl-zoo 用 0.04：随机动作太多，"
+            "训练回合的回报远低于贪心策略，而判断“解决”平均的正是这些训练回合",
     exploration_steps="ε 在这么多个环境步内从 eps_start 线性降到 eps_end（rl-zoo：50000 步的 0.16）",
     max_grad_norm="梯度范数的上限（SB3 的 DQN：10；0 表示不限制）",
     hidden="两层隐藏层各有多少单元（64 到 256）",
     double="Double DQN（van Hasselt 等 2016）：当前网络选下一个动作，目标网络给它估值",
-    q_check_every="每隔多少次学习检查一次 Q 和回报（inside.png）：贪心策略玩 Q_CHECK 里定的几个回合",
+    q_check_every="每隔多少次学习检查一次 Q 和回报（inside.png）：贪心策略玩 2 个回合（最长 1000 步）",
     stop_when_solved="最近 solved_window 个结束的回合平均回报达到解决线，而且当时的贪心策略玩 "
                      "eval_episodes 个回合（环境种子 eval_seed + 1）也达到，就停下；每次学习最多检查一次",
     solved_return="算作解决的回报；none 表示用环境的 reward_threshold（CartPole-v1 是 475）",
