@@ -146,6 +146,11 @@ def gae_cases():
         (tr("env 1 truncated at t = 0, env 0 not: each column on its own",
             "t = 0 处环境 1 时间截断，环境 0 没有：每一列各算各的"),
          (r, v, nv, no, env1, 0.5, 1.0), t([1.5, 1.0], [1.0, 1.0])),
+        (tr("truncated at t = 0, V(final obs) = next_values[0] = 6, not values[1] = 2 (the next "
+            "episode's first state): delta_0 = 1 + 0.5 * 6 - 1 = 3",
+            "t = 0 处时间截断，V(最后的观测) = next_values[0] = 6，不是 values[1] = 2（下一个回合"
+            "的第一个状态）：delta_0 = 1 + 0.5 * 6 - 1 = 3"),
+         (r, v, t([6.0, 6.0], [4.0, 4.0]), no, at0, 0.5, 1.0), t([3.0, 3.0], [1.0, 1.0])),
     ]
 
 
@@ -807,8 +812,10 @@ def returns_with(r, nv, term, trunc, gamma, cut=True, trunc_boots=True, term_win
 
 
 def gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=True, cut_at_trunc=True,
-             term_wins=True, next_v=True, term_resets=True):
+             term_wins=True, next_v=True, term_resets=True, shifted=False):
     adv, last = torch.zeros_like(r), torch.zeros_like(r[0])
+    if shifted:  # values[t + 1] read as V(s_{t+1}), next_values only at the end
+        nv = torch.cat([v[1:], nv[-1:]])
     for t in reversed(range(len(r))):
         boots = ~term[t] if term_wins else (~term[t] | trunc[t])
         boots = boots & ~trunc[t] if not trunc_boots else boots
@@ -855,7 +862,12 @@ def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
                 "delta 里用了 V(s_t)，应该是 V(s_{t+1})（用了 values[t]，不是 next_values[t]）"),
              gae_with(r, v, nv, term, trunc, gamma, lam, next_v=False)),
             (tr("the sum is not cut where an episode ended", "回合结束处没有切断累加"),
-             gae_with(r, v, nv, term, trunc, gamma, lam, term_resets=False))]
+             gae_with(r, v, nv, term, trunc, gamma, lam, term_resets=False)),
+            (tr("values[t + 1] where next_values[t] belongs: after a truncation values[t + 1] is "
+                "the next episode's first state, not the final observation",
+                "用了 values[t + 1]，应该是 next_values[t]：时间截断之后，values[t + 1] 是下一个"
+                "回合的第一个状态，不是最后的观测"),
+             gae_with(r, v, nv, term, trunc, gamma, lam, shifted=True))]
 
 
 def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,
