@@ -444,7 +444,11 @@ def ddpg_critic_mistakes(nets, batch, cfg):
     c, a, ct, at = nets["critic"], nets["actor"], nets["critic_target"], nets["actor_target"]
     with torch.no_grad():
         q = c(obs, action)
-        return [(tr("the target from the critic being trained, Q(s', mu'(s')), not the target "
+        return [(tr("the target from the networks being trained, Q(s', mu(s')), not the target "
+                    "networks Q'(s', mu'(s'))", "TD 目标用了正在训练的当前网络 Q(s', mu(s'))，"
+                    "不是目标网络 Q'(s', mu'(s'))"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * c(next_obs, a(next_obs)))),
+                (tr("the target from the critic being trained, Q(s', mu'(s')), not the target "
                     "critic Q'", "TD 目标用了正在训练的评论员 Q(s', mu'(s'))，不是目标评论员 Q'"),
                  F.mse_loss(q, reward + cfg.gamma * not_done * c(next_obs, at(next_obs)))),
                 (tr("the target's action from the actor being trained, mu(s'), not mu'(s')",
@@ -468,6 +472,8 @@ def check_ddpg_update(fn):
     theirs, batch, cfg = small_ddpg()
     yours = copy.deepcopy(theirs)
     mistakes = ddpg_critic_mistakes(yours, batch, cfg)
+    with torch.no_grad():  # the actor's loss on the critic before its step: the steps swapped
+        actor_first = float(-yours["critic"](batch[0], yours["actor"](batch[0])).mean())
     expected = own(*theirs.values(), batch, cfg)
     got = fn(*yours.values(), batch, cfg)
     case = tr("case: one update of tiny networks (3 states, 1 action, 4 samples, the second "
@@ -496,6 +502,16 @@ def check_ddpg_update(fn):
                                   "软更新之后的目标评论员")),
              ("actor_target", tr("the actor's target after the soft update",
                                  "软更新之后的目标演员"))]
+    swapped_steps = ""
+    try:
+        got_actor = float(got[1])
+    except (TypeError, ValueError, RuntimeError):
+        got_actor = math.nan
+    if abs(got_actor - float(expected[1])) > 1e-5 and abs(got_actor - actor_first) < 1e-5:
+        swapped_steps = tr("\n  this is exactly what this mistake gives: the actor's step taken "
+                           "before the critic's (the actor must learn from the updated critic)",
+                           "\n  这正是这个错误会得到的值：演员在评论员之前更新了（演员要用更新过的"
+                           "评论员来学）")
     for name, what in steps:
         for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
             if not torch.allclose(p, q, atol=1e-6):
@@ -514,8 +530,12 @@ def check_ddpg_update(fn):
                 raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
                                        f"(largest difference {gap(p, q):.3g}): ",
                                        f"{what}：{pname} 和脚本自己的不同（最大相差 "
-                                       f"{gap(p, q):.3g}）：") + hint)
-    compare("actor_loss", got[1], expected[1])
+                                       f"{gap(p, q):.3g}）：") + hint
+                             + (swapped_steps if name == "actor" else ""))
+    try:
+        compare("actor_loss", got[1], expected[1])
+    except Failed as e:
+        raise Failed(case + str(e) + swapped_steps) from None
 
 
 def check_soft_update(fn):
@@ -551,7 +571,8 @@ def check_soft_update(fn):
 def td3_case(sigma, c, low, high):
     """nets whose targets are simple functions of s' (act_dim 1): mu'(s') = s'_2,
     Q1'(s', a) = s'_0 + (a - s'_2)^2, Q2'(s', a) = s'_1 + 2 (a - s'_2)^2; the critics give 0
-    for every batch, so the gradient of the critics' loss gives y back: dL/dQ = 2 (Q - y) / B."""
+    for every batch, so the gradient of the critics' loss gives y back: dL/dQ = 2 (Q - y) / B.
+    The online actor, mu(s') = s'_2 + 1, is not the target's: a target taken from it shows."""
     class Zero(torch.nn.Module):
         def __init__(self):
             super().__init__()
@@ -567,7 +588,7 @@ def td3_case(sigma, c, low, high):
         def step(self):
             pass
 
-    nets = dict(actor_target=lambda s: s[:, 2:3],
+    nets = dict(actor_target=lambda s: s[:, 2:3], actor=lambda s: s[:, 2:3] + 1.0,
                 critic_target=lambda s, a: s[:, 0] + ((a - s[:, 2:3]) ** 2).sum(-1),
                 critic2_target=lambda s, a: s[:, 1] + 2 * ((a - s[:, 2:3]) ** 2).sum(-1),
                 critic=Zero(), critic2=Zero(), critic_opt=NoStep())
@@ -590,7 +611,14 @@ def td3_cases():
           (tr("the mean of Q1' and Q2' where their min belongs", "取了 Q1' 和 Q2' 的平均，应该取较小的"),
            t(2.75, 2.75, 1.0)),
           (tr("no not_done: a future after a termination", "没有乘 not_done：终止之后还加了未来"),
-           t(2.5, 2.0, 1.5))]),
+           t(2.5, 2.0, 1.5)),
+          (tr("the critics being trained, nets[\"critic\"] and nets[\"critic2\"], where the target "
+              "critics Q1', Q2' belong (here they give 0, so y = r)",
+              "用了正在训练的当前评论员 nets[\"critic\"]、nets[\"critic2\"]，应该用目标评论员 "
+              "Q1'、Q2'（这里它们给出 0，所以 y = r）"), t(1.0, 1.0, 1.0)),
+          (tr("the actor being trained, nets[\"actor\"], where the target actor mu' belongs "
+              "(here mu(s') = mu'(s') + 1)", "用了正在训练的当前演员 nets[\"actor\"]，应该用目标演员 "
+              "mu'（这里 mu(s') = mu'(s') + 1）"), t(3.0, 3.0, 1.0))]),
         (tr("sigma = 10000, c = 0.5, half_width = 2: eps always clipped, |a~ - mu'(s')| = 1",
             "sigma = 10000，c = 0.5，half_width = 2：噪声总被裁剪，|a~ - mu'(s')| = 1"),
          (1e4, 0.5, [-3.0], [3.0]), t(3.0, 3.0, 1.0),
@@ -833,6 +861,11 @@ def returns_mistakes(r, nv, term, trunc, gamma):
             (tr("a time-limit truncation treated as a termination (no bootstrap there)",
                 "把时间截断当成了终止（那里没有自举）"),
              returns_with(r, nv, term, trunc, gamma, trunc_boots=False)),
+            (tr("truncation ignored: the sum runs on past a truncation into the next episode "
+                "(there the future is V(final obs) = next_values[t])",
+                "忽略了时间截断：累加越过了时间截断，进入了下一个回合（那里的未来是 "
+                "V(最后的观测) = next_values[t]）"),
+             returns_with(r, nv, term, torch.zeros_like(trunc), gamma)),
             (tr("truncation wins where both flags are set (termination must win)",
                 "两个标志都在时按时间截断算了（应该按终止算）"),
              returns_with(r, nv, term, trunc, gamma, term_wins=False)),
@@ -871,7 +904,7 @@ def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
 
 
 def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,
-              renormalized=False, upper_only=False):
+              renormalized=False, upper_only=False, min_of_clipped_product=False):
     logp = Categorical(logits=policy(data["obs"])).log_prob(data["act"]).detach()
     r = torch.exp(data["logp"] - logp) if inverted else torch.exp(logp - data["logp"])
     a = data["adv"]
@@ -879,6 +912,8 @@ def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=Fal
         a = (a - a.mean()) / (a.std() + 1e-8)
     if upper_only:
         return -torch.min(r * a, r.clamp(max=1 + eps) * a).mean()
+    if min_of_clipped_product:
+        return -torch.min(r * a, (r * a).clamp(1 - eps, 1 + eps)).mean()
     if clip_product:
         return -(r * a).clamp(1 - eps, 1 + eps).mean()
     return -(torch.max if use_max else torch.min)(r * a, r.clamp(1 - eps, 1 + eps) * a).mean()
@@ -893,6 +928,11 @@ def clip_mistakes(policy, data, eps):
              surrogate(policy, data, eps, use_max=True)),
             (tr("the product r * A clipped, not the ratio r", "裁剪了乘积 r * A，而不是比值 r"),
              surrogate(policy, data, eps, clip_product=True)),
+            (tr("the product r * A clipped inside the min, min(r A, clip(r A, 1 - eps, 1 + eps)): "
+                "clip the ratio, then multiply, min(r A, clip(r, 1 - eps, 1 + eps) A)",
+                "在 min 里裁剪了乘积 r * A，即 min(r A, clip(r A, 1 - eps, 1 + eps))：应该先裁剪比值，"
+                "再乘 A，即 min(r A, clip(r, 1 - eps, 1 + eps) A)"),
+             surrogate(policy, data, eps, min_of_clipped_product=True)),
             (tr("the sign: the objective L_CLIP returned, where the loss is -L_CLIP",
                 "符号反了：返回的是目标 L_CLIP，损失应该是 -L_CLIP"), -right),
             (tr("a sum over the batch where the mean belongs", "对批量求了和，应该求均值"),

@@ -47,6 +47,12 @@ WRONG = {
                     future = torch.where(terminated[t], 0.0, future)
                     returns[t] = future = rewards[t] + gamma * future
                 return returns""", "(a)", "next_values[t - 1]"),
+        ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
+                returns, future = torch.zeros_like(rewards), next_values[-1]
+                for t in reversed(range(len(rewards))):  # truncated never read
+                    future = torch.where(terminated[t], 0.0, future)
+                    returns[t] = future = rewards[t] + gamma * future
+                return returns""", "(a)", "truncation ignored"),
     ],
     "gae": [
         ("""def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
@@ -94,6 +100,12 @@ WRONG = {
                 ratio = torch.exp(logp - data["logp"])  # the product clipped, not the ratio
                 loss = -(ratio * data["adv"]).clamp(1 - clip_coef, 1 + clip_coef).mean()
                 return loss, dist.entropy().mean(), {}""", "(a)", "the product r * A clipped"),
+        ("""def compute_loss_pi(policy, data, clip_coef):
+                dist = Categorical(logits=policy(data["obs"]))
+                ratio = torch.exp(dist.log_prob(data["act"]) - data["logp"])
+                adv = data["adv"]  # the product clipped inside the min
+                loss = -torch.min(ratio * adv, (ratio * adv).clamp(1 - clip_coef, 1 + clip_coef)).mean()
+                return loss, dist.entropy().mean(), {}""", "(a)", "clipped inside the min"),
         ("""def compute_loss_pi(policy, data, clip_coef):
                 dist = Categorical(logits=policy(data["obs"]))
                 ratio = torch.exp(dist.log_prob(data["act"]) - data["logp"])
@@ -192,6 +204,32 @@ WRONG = {
                 return -critic(obs, actor(obs)).sum()""", "(a)", "a sum over the batch"),
     ],
     "td3_target": [
+        ("""def update_critics(nets, batch, half_width, low, high, cfg):
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+                    a2 = (nets["actor_target"](next_obs) + half_width * eps).clamp(low, high)
+                    q1, q2 = nets["critic"](next_obs, a2), nets["critic2"](next_obs, a2)  # not Q'
+                    y = reward + cfg.gamma * not_done * torch.min(q1, q2)
+                critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                               + F.mse_loss(nets["critic2"](obs, action), y))
+                nets["critic_opt"].zero_grad()
+                critic_loss.backward()
+                nets["critic_opt"].step()
+                return critic_loss.detach()""", "(a)", "the critics being trained"),
+        ("""def update_critics(nets, batch, half_width, low, high, cfg):
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+                    a2 = (nets["actor"](next_obs) + half_width * eps).clamp(low, high)  # not mu'
+                    q1, q2 = nets["critic_target"](next_obs, a2), nets["critic2_target"](next_obs, a2)
+                    y = reward + cfg.gamma * not_done * torch.min(q1, q2)
+                critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                               + F.mse_loss(nets["critic2"](obs, action), y))
+                nets["critic_opt"].zero_grad()
+                critic_loss.backward()
+                nets["critic_opt"].step()
+                return critic_loss.detach()""", "(a)", "the actor being trained"),
         ("""def update_critics(nets, batch, half_width, low, high, cfg):
                 obs, action, reward, next_obs, not_done = batch
                 with torch.no_grad():
@@ -319,6 +357,38 @@ WRONG = {
                 return advantages + values, advantages""", "(a)", "no bootstrap at the rollout's end"),
     ],
     "ddpg_update": [
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():  # both networks being trained in the target
+                    y = td_target(reward, not_done, critic(next_obs, actor(next_obs)), cfg.gamma)
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_opt.zero_grad()
+                critic_loss.backward()
+                critic_opt.step()
+                actor_loss = compute_loss_actor(actor, critic, obs)
+                actor_opt.zero_grad()
+                actor_loss.backward(inputs=list(actor.parameters()))
+                actor_opt.step()
+                soft_update(critic_target, critic, cfg.tau)
+                soft_update(actor_target, actor, cfg.tau)
+                return critic_loss.detach(), actor_loss.detach()""", "(a)", "the target from the networks being trained"),
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+                actor_loss = compute_loss_actor(actor, critic, obs)  # the actor's step first
+                actor_opt.zero_grad()
+                actor_loss.backward(inputs=list(actor.parameters()))
+                actor_opt.step()
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_opt.zero_grad()
+                critic_loss.backward()
+                critic_opt.step()
+                soft_update(critic_target, critic, cfg.tau)
+                soft_update(actor_target, actor, cfg.tau)
+                return critic_loss.detach(), actor_loss.detach()""", "(a)", "the actor's step taken before the critic's"),
         ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
                 from ddpg_walker import compute_loss_actor, soft_update, td_target
                 obs, action, reward, next_obs, not_done = batch
