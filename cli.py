@@ -79,8 +79,8 @@ class SolvedFlags(OutputFlags):
 
     stop_when_solved: bool = True
     """stop once the mean return of the last solved_window finished episodes reaches the
-    solved return and pi as it is then does too, over eval_episodes episodes with actions drawn
-    from pi (env seed eval_seed + 1); checked at most once per update"""
+    solved return and the policy as it is then does too, over eval_episodes episodes acting as
+    its first evaluation does (env seed eval_seed + 1); checked at most once per update"""
     solved_return: float | None = None
     """the return that counts as solved; none = the env's reward_threshold (CartPole's: 475)"""
     solved_window: int = 20

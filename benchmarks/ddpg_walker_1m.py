@@ -183,7 +183,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("action", choices=("start", "status", "table", "plot"))
     parser.add_argument("parent", nargs="?", type=Path, help="folder of the five run folders")
-    parser.add_argument("--script", default=SCRIPT, choices=("ddpg_walker", "td3_walker"))
+    parser.add_argument("--script", default=SCRIPT, choices=("ddpg_walker", "td3_walker", "sac_walker"))
     parser.add_argument("--seeds", type=int, nargs="+", default=SEEDS,
                         help="start: only these seeds (the others wait for a later start)")
     args = parser.parse_args()
