@@ -93,6 +93,13 @@ def declared(logged, row, where):
                          f"logged {sorted(row)}: declare each column once, log each one")
 
 
+def labels_and_tags(logged):
+    """A script's declaration of what it logs -> ({column: the pictures' label},
+    {column: its TensorBoard tag, where it declares one})."""
+    return ({column: spec[1] for column, spec in logged.items()},
+            {column: spec[2] for column, spec in logged.items() if len(spec) > 2})
+
+
 class UpdateLog:
     """A run folder of a script that updates on batches: a progress.csv row per update, with
     a progress line every print_every updates; the finished episodes (episodes.csv at the end)
@@ -100,12 +107,11 @@ class UpdateLog:
     arrays, the states visited). `logged`: the script's declaration of what each update logs,
     {column: (format on the progress line or None: only in the CSV, what it is (the pictures'
     label)[, its TensorBoard tag])}; a value of
-    None is "not measured at this update" (an empty cell, left out of the line)."""
+    None is "not measured at this update" (nan in the CSV, left out of the line)."""
 
     def __init__(self, script, cfg, logged, task=None):
         self.script, self.cfg, self.logged = script, cfg, logged
-        self.labels = {column: spec[1] for column, spec in logged.items()}
-        self.tags = {column: spec[2] for column, spec in logged.items() if len(spec) > 2}
+        self.labels, self.tags = labels_and_tags(logged)
         self.window = getattr(cfg, "solved_window", None)  # none: no episodes to average
         self.start_time = time.time()
         self.dir = make_run_dir(cfg.run_dir, script, task or cfg.env_id, cfg.seed)
@@ -210,10 +216,10 @@ class EvaluationLog:
     def __init__(self, script, cfg, device, logged, learning_starts, eval_every, shipped=None):
         self.script, self.cfg, self.logged = script, cfg, logged
         self.learning_starts = learning_starts
+        labels, self.tags = labels_and_tags(logged)
         self.labels = {"eval_mean": "evaluation: mean return, no noise",
                        "train_return_mean10": f"training: mean of the last {RECENT} episodes",
-                       **{column: spec[1] for column, spec in logged.items()}}
-        self.tags = {column: spec[2] for column, spec in logged.items() if len(spec) > 2}
+                       **labels}
         self.episodes, self.evaluations = [], []  # (step, return); evaluations.csv's rows
         now = time.time()
         self.timer = dict(start=now, step=0, time=now, rate=float("nan"))
