@@ -196,9 +196,8 @@ QUANTILES = {"ratio_q05": 0.05, "ratio_q25": 0.25, "ratio_median": 0.5, "ratio_q
 
 
 # ratio_stats' numbers as progress.csv columns: (progress-line format: none, what each is)
-RATIO_COLUMNS = {"ratio_min": (None, "r's min after the update"),
-                 **{key: (None, f"r's {key[6:]} after the update") for key in QUANTILES},
-                 "ratio_max": (None, "r's max after the update"),
+RATIO_COLUMNS = {**{key: (None, f"r's {key[6:]} after the update")
+                    for key in ("ratio_min", *QUANTILES, "ratio_max")},
                  "zero_grad_frac": (None, "no policy gradient after it (clip binds on A's side)"),
                  "clipfrac_after": (None, "clipfrac after the update")}
 
