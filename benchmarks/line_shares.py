@@ -11,6 +11,7 @@
 
     python benchmarks/line_shares.py            # every script (a top-level *.py with a train())
     python benchmarks/line_shares.py sac_walker.py   # one
+    python benchmarks/line_shares.py --show dqn_cartpole.py   # each line marked a, h or p
 """
 
 import ast
@@ -82,7 +83,7 @@ def shares(path):
         if line.strip():
             counts[k] += 1
     train = next(n for n in tree.body if getattr(n, "name", "") == "train")
-    return len(lines), counts, train.end_lineno - train.lineno + 1
+    return len(lines), counts, train.end_lineno - train.lineno + 1, kind
 
 
 def main():
@@ -91,8 +92,13 @@ def main():
         return
     print(f"{'script':26} {'lines':>5} {'non-blank':>9} {'algorithm':>10} {'hyperparams':>11} "
           f"{'plumbing':>9} {'train()':>8}")
-    for name in sys.argv[1:] or SCRIPTS:
-        total, c, train = shares(ROOT / name)
+    show = "--show" in sys.argv
+    for name in [a for a in sys.argv[1:] if a != "--show"] or SCRIPTS:
+        total, c, train, kind = shares(ROOT / name)
+        if show:  # each line with its kind's initial (a, h or p), to see what is counted how
+            text = (ROOT / name).read_text(encoding="utf-8").splitlines()
+            for i, (line, k) in enumerate(zip(text, kind), 1):
+                print(f"{k[0] if line.strip() else ' '} {i:4} {line}")
         n = sum(c.values())
         algorithm, hyper, plumbing = (c[k] / n for k in ("algorithm", "hyperparameters", "plumbing"))
         print(f"{name:26} {total:5} {n:9} {algorithm:9.1%} {hyper:11.1%} {plumbing:9.1%} {train:8}")
