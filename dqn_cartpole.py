@@ -26,7 +26,8 @@ benchmarks/results/dqn_cartpole_seeds.csv).
 中文导读：DQN（深度 Q 网络），基于价值的方法：没有策略网络，只学 Q(s, a)；训练时按 ε-贪心
 选动作，训练后贪心地选 argmax_a Q(s, a)。回放缓冲区和目标网络的写法和 ddpg_walker.py 一样，
 只是目标网络每隔 target_update_interval 个梯度步整个复制一次（硬更新），而不是软更新。
---double 是 Double DQN：由当前网络选下一个动作、目标网络给它估值，治的是 max 带来的高估；
+max 在同一组带噪声的估计上既挑动作又给它估值，所以系统性地偏高（E[max Q] >= max E[Q]）；
+--double 是 Double DQN：由当前网络选下一个动作、目标网络给它估值，治的就是这种高估；
 inside.png 把 Q(s, argmax Q) 和贪心策略从同一个状态出发实际得到的折扣回报画在一起，
 加不加 --double 各跑一次，比较两张图（这里的默认设置下，CartPole 上两者差得不多）。
 TD3 的裁剪双 Q 学习就是从这里来的。
@@ -76,9 +77,7 @@ class QNetwork(nn.Module):
 @dataclass
 class Config(cli.SolvedFlags):
     """The algorithm's settings (rl-zoo's CartPole-v1 DQN where no other reason is given); the
-    flags every script
-    shares (--run-dir, --gifs, --eval, --watch, --threads, ...) and the solved rule's come
-    from cli.SolvedFlags."""
+    shared flags (--run-dir, --eval, --threads, ...) and the solved rule's: cli.SolvedFlags."""
     # --- experiment ---
     env_id: str = "CartPole-v1"
     """gymnasium id of an env with a Box observation and Discrete actions"""
@@ -105,28 +104,25 @@ class Config(cli.SolvedFlags):
     gradient_steps: int = 128
     """minibatch steps in each learning phase (Mnih et al.: 1)"""
     target_update_interval: int = 64
-    """gradient steps between copies of the network into the target network (Mnih et al.:
-    10000; rl-zoo's 10 env steps amount to 128: once per learning phase). Each copy lets Q
-    look one step further ahead, so two per phase build Q twice as fast; every 32, Q diverged"""
+    """gradient steps between copies of the network into the target (Mnih et al.: 10000; rl-zoo's
+    10 env steps: once a phase here). Each copy lets Q look one step further: two a phase build
+    Q twice as fast; every 32, Q diverged"""
     eps_start: float = 1.0
     """epsilon of epsilon-greedy at step 0"""
     eps_end: float = 0.01
-    """epsilon after the decay, kept to the end (0.01 .. 0.1; rl-zoo: 0.04, whose random
-    actions kept the training episodes, which the solved rule averages, far below the greedy
-    policy's)"""
+    """epsilon after the decay, to the end (0.01 .. 0.1; rl-zoo's 0.04 kept the training
+    episodes, which the solved rule averages, far below the greedy policy's returns)"""
     exploration_steps: int = 8000
-    """env steps over which epsilon falls linearly from eps_start to eps_end (rl-zoo: 0.16 of
-    50000 steps)"""
+    """env steps of epsilon's linear fall from eps_start to eps_end (rl-zoo: 0.16 x 50000)"""
     max_grad_norm: float = 10.0
     """clip the gradient norm to this (SB3's DQN: 10; 0 = no clipping)"""
     hidden: int = 256
     """units in each of the two hidden layers (64 .. 256)"""
     double: bool = False
-    """Double DQN (van Hasselt et al. 2016): the network picks the next action, the target
-    network values it"""
+    """Double DQN (van Hasselt et al. 2016): the network picks a', the target network values it"""
     q_check_every: int = 10
     """learning phases between the checks of Q against the return (inside.png): the greedy
-    policy plays 2 episodes of at most 1000 steps (Q_CHECK)"""
+    policy plays 2 episodes of at most 1000 steps"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -135,45 +131,12 @@ class Config(cli.SolvedFlags):
             learning_rate="> 0", gamma="(0, 1]", train_freq="> 0", gradient_steps="> 0",
             target_update_interval="> 0", eps_start="[0, 1]", eps_end="[0, 1]",
             exploration_steps="> 0", max_grad_norm=">= 0", q_check_every="> 0")
-        # The first learning phase samples batch_size transitions: the warm-up must store them.
         cli.check(self.start_steps >= self.batch_size,
                   f"--start-steps must be at least --batch-size ({self.batch_size}), "
                   f"got {self.start_steps}")
         cli.check(self.total_timesteps > self.start_steps,
                   f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
                   f"({self.start_steps}): learning starts after the warm-up")
-
-
-FLAGS_ZH = dict(  # --help-zh's Chinese line of each of its flags (help_zh.py)
-    env_id="gymnasium 的环境名，观测是 Box、动作是 Discrete",
-    seed="随机种子，决定 torch、numpy 的随机数和环境：同一个种子、同一台机器，progress.csv 完全相同",
-    total_timesteps="环境步数的预算（rl-zoo：50000）；解决了就停下",
-    start_steps="开头多少步用均匀随机的动作，先把回放缓冲区填起来，再开始学习（至少等于 batch_size；"
-                "名字和 DDPG 的一样；rl-zoo 的 learning_starts：1000）",
-    buffer_size="回放缓冲区的容量；存满后覆盖最旧的转移",
-    batch_size="每个梯度步从回放缓冲区随机取多少条数据（32 到 256；Mnih 等：32）",
-    learning_rate="Adam 的学习率（1e-4 到 3e-3；rl-zoo 用 2.3e-3，目标网络每 32 个梯度步复制一次时 Q 发散了）",
-    gamma="折扣因子（0.98 到 0.999）；0.99 大约往前看 100 步（用 0.98，即 50 步时，五个种子里有三个"
-          "没有解决）",
-    train_freq="两次学习之间走多少个环境步（Mnih 等：4）",
-    gradient_steps="每次学习走几个小批量梯度步（Mnih 等：1）",
-    target_update_interval="每隔多少个梯度步把当前网络复制进目标网络（Mnih 等：10000；rl-zoo 每 10 "
-                           "个环境步复制一次，换算成这里的梯度步约是 128，也就是每次学习复制一次）。"
-                           "每复制一次，Q 就多往前看一步，所以每次学习复制两次，Q 的增长快一倍；"
-                           "每 32 步复制一次时，Q 发散了",
-    eps_start="ε-贪心在第 0 步的 ε",
-    eps_end="ε 衰减完以后的值，一直保持到训练结束（0.01 到 0.1）。rl-zoo 用 0.04：随机动作太多，"
-            "训练回合的回报远低于贪心策略，而判断“解决”平均的正是这些训练回合",
-    exploration_steps="ε 在这么多个环境步内从 eps_start 线性降到 eps_end（rl-zoo：50000 步的 0.16）",
-    max_grad_norm="梯度范数的上限（SB3 的 DQN：10；0 表示不限制）",
-    hidden="两层隐藏层各有多少单元（64 到 256）",
-    double="Double DQN（van Hasselt 等 2016）：当前网络选下一个动作，目标网络给它估值",
-    q_check_every="每隔多少次学习检查一次 Q 和回报（inside.png）：贪心策略玩 2 个回合（最长 1000 步）",
-    stop_when_solved="最近 solved_window 个结束的回合平均回报达到解决线，而且当时的贪心策略玩 "
-                     "eval_episodes 个回合（环境种子 eval_seed + 1）也达到，就停下；每次学习最多检查一次",
-    solved_return="算作解决的回报；none 表示用环境的 reward_threshold（CartPole-v1 是 475）",
-    solved_window="判断解决时平均最近多少个结束的回合（进度行里的回报也是它）",
-)
 
 
 # ==== Replay buffer, target, loss, update =================================================
@@ -239,7 +202,10 @@ def td_target(reward, not_done, next_value, gamma):
     DQN:        next_value = max_a Q'(s', a)                    (van Hasselt et al. 2016, eq. 3)
     Double DQN: next_value = Q'(s', argmax_a Q(s', a))          (van Hasselt et al. 2016, eq. 4)
     The max both picks and values the action with the same noisy estimates, so it is biased
-    upward; Double DQN picks with one network and values with the other."""
+    upward: E[max_a Q] >= max_a E[Q]. Two actions worth the same, each estimated with
+    independent noise of std 1: the max is 1/sqrt(pi) = 0.56 too high on average, and each
+    bootstrapped target passes that on to the next. Double DQN picks with one network and
+    values with the other, whose noise is not the one the pick was made on."""
     return reward + gamma * not_done * next_value
 
 
@@ -278,13 +244,10 @@ LOGGED = dict(epsilon=(".3f", "epsilon", "charts/epsilon"),
               mc_return=(".1f", "what greedy obtained: sum of gamma^k r from s"))
 SMOKE = dict(total_timesteps=1200, start_steps=200, train_freq=100, gradient_steps=4,
              q_check_every=2, stop_when_solved=False, eval_episodes=2)  # tests: seconds
-Q_CHECK = dict(episodes=2, max_episode_steps=1000)  # greedy episodes; longer than the limit's
-# 500, so that a policy that never falls still leaves 500 states far enough from its end
 
 
 def pictures(cfg):
-    """curve.png: epsilon and the loss; inside.png: the greedy policy's Q against its return
-    from the same states, and the two next-state values on the minibatches."""
+    """curve.png: epsilon and the loss; inside.png: Q against the return, and the two targets."""
     what = "Double DQN" if cfg.double else "DQN"
     return dict(curve=[[plots.lines("epsilon", right=("loss",))]], inside=[[
         plots.lines("q_greedy", "mc_return", title=f"{what}: the greedy policy's states"),
@@ -295,9 +258,8 @@ def pictures(cfg):
 
 
 def train(cfg: Config):
-    """Train DQN (or with cfg.double Double DQN) with `cfg`. Returns a dict: run_dir, solved,
-    solved_step, global_step, episode_returns, greedy_returns, interrupted (as
-    report.finish_updates)."""
+    """Train DQN (Double DQN with cfg.double). Returns report.finish_updates's dict: run_dir,
+    solved, solved_step, global_step, episode_returns, greedy_returns, interrupted."""
     # --- seeding and setup ---
     torch.manual_seed(cfg.seed)  # the network's init and the minibatches
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
@@ -361,9 +323,10 @@ def train(cfg: Config):
             q_greedy = mc_return = None  # measured every q_check_every phases:
             if phases % cfg.q_check_every == 0:  # Q against the return, as in ddpg_walker.py
                 seen = []  # the greedy policy's episodes: their states and rewards
-                common.evaluate(cfg.env_id, common.pi_actions(q_net, device, 0, greedy=True),
-                                Q_CHECK["episodes"], cfg.eval_seed + 2, trajectories=seen,
-                                max_episode_steps=Q_CHECK["max_episode_steps"])
+                # 2 episodes of up to 1000 steps, longer than the limit's 500, so that a policy
+                # that never falls still leaves 500 states far enough from its end
+                common.evaluate(cfg.env_id, common.pi_actions(q_net, device, 0, greedy=True), 2,
+                                cfg.eval_seed + 2, trajectories=seen, max_episode_steps=1000)
                 # mean max_a Q(s, a) over their states, and the discounted return from each
                 q_greedy, mc_return, _ = common.q_against_return(
                     seen, q_net, lambda obs, q_values: q_values.max(-1).values, cfg.gamma, device)

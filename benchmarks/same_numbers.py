@@ -45,6 +45,17 @@ CASES = {
         "--eval-every", "1000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
     "td3_walker_walker2d": ("td3_walker.py", [
         "--total-timesteps", "30000", "--eval-episodes", "2", "--no-gifs", "--no-cuda"]),
+    # DQN past its warm-up: learning phases, Q checks and the target's copies, both targets
+    **{f"dqn_cartpole{flag}": ("dqn_cartpole.py", [
+        "--seed", "0", "--total-timesteps", "6000", *([flag] if flag else []),
+        "--eval-episodes", "3", "--no-gifs", "--no-curves"]) for flag in ("", "--double")},
+    # the language-model scripts: every phase, a few steps each
+    "grpo_addition_short": ("grpo_addition.py", [
+        "--digits", "1", "--sft-steps", "30", "--grpo-steps", "10", "--eval-prompts", "50",
+        "--no-curves"]),
+    "rlhf_addition_short": ("rlhf_addition.py", [
+        "--digits", "1", "--sft-steps", "30", "--rm-epochs", "1", "--ppo-steps", "4",
+        "--eval-prompts", "50", "--no-curves"]),
     # SAC the same way: its long runs go on from a frozen commit too
     "sac_walker_pendulum": ("sac_walker.py", [
         "--env-id", "InvertedPendulum-v5", "--total-timesteps", "3000", "--start-steps", "1000",
