@@ -152,7 +152,8 @@ FLAGS_ZH = dict(  # --help-zh's Chinese line of each of its flags (help_zh.py)
                 "名字和 DDPG 的一样；rl-zoo 的 learning_starts：1000）",
     buffer_size="回放缓冲区的容量；存满后覆盖最旧的转移",
     batch_size="每个梯度步从回放缓冲区随机取多少条数据（32 到 256；Mnih 等：32）",
-    learning_rate="Adam 的学习率（1e-4 到 3e-3；rl-zoo 用 2.3e-3，目标网络每 32 个梯度步复制一次时 Q 发散了）",
+    learning_rate="Adam 的学习率（1e-4 到 3e-3）。rl-zoo 用 2.3e-3，但在目标网络每 32 个梯度步"
+                  "复制一次的设置下，这个学习率让 Q 发散了",
     gamma="折扣因子（0.98 到 0.999）；0.99 大约往前看 100 步（用 0.98，即 50 步时，五个种子里有三个"
           "没有解决）",
     train_freq="两次学习之间走多少个环境步（Mnih 等：4）",
