@@ -1143,7 +1143,7 @@ def learns(ex, fn):
             raise Failed(tr(
                 f"held-out pass@1 after GRPO is {after:.3f} (from {before:.3f} after supervision), "
                 f"under {GRPO_BAR} (the script's own: 0.94 to 0.96 on seeds 0-4)",
-                f"GRPO 之后留出题的 pass@1 是 {after:.3f}（监督学习之后是 {before:.3f}），低于 "
+                f"GRPO 之后留出题目上的 pass@1 是 {after:.3f}（监督学习之后是 {before:.3f}），低于 "
                 f"{GRPO_BAR}（脚本自己的在种子 0 到 4 上是 0.94 到 0.96）"))
     elif "evaluations" in result:  # DDPG, TD3 on InvertedPendulum-v5: the pole held to the end
         means = [e["eval_mean"] for e in result["evaluations"]]
