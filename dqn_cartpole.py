@@ -105,8 +105,8 @@ class Config(cli.SolvedFlags):
     """minibatch steps in each learning phase (Mnih et al.: 1)"""
     target_update_interval: int = 64
     """gradient steps between copies of the network into the target (Mnih et al.: 10000; rl-zoo's
-    10 env steps: once a phase here). Each copy lets Q look one step further: two a phase build
-    Q twice as fast; every 32, Q diverged"""
+    10 env steps amount to 128: once a phase). Each copy lets Q look one step further: two a
+    phase build Q twice as fast; every 32, Q diverged"""
     eps_start: float = 1.0
     """epsilon of epsilon-greedy at step 0"""
     eps_end: float = 0.01

@@ -90,10 +90,24 @@ def columns(text):
     return len(text) + len(WIDE.findall(text))
 
 
+def _join(text):
+    """The lines of `text` as one, as Chinese is written: no space where two Chinese characters
+    meet or where full-width punctuation (，（) touches the break; a space between Chinese and
+    Latin text (读 DDPG, 用 n 步) and between two Latin words."""
+    def glue(m):  # m[1] ends a line, m[2] starts the next (looked at, not replaced)
+        tight = PUNCT.match(m[1]) or PUNCT.match(m[2]) or HAN.match(m[1]) and HAN.match(m[2])
+        return m[1] + ("" if tight else " ")
+    return re.sub(r"(\S)[ \t]*\n\s*(?=(\S))", glue, text)
+
+
+HAN = re.compile(r"[\u4e00-\u9fff]")  # a Chinese character
+PUNCT = re.compile(r"[\u3000-\u303f\uff00-\uffef]")  # full-width punctuation
+
+
 def _wrap_wide(text, width):
     """`text` in lines of at most `width` columns, broken between words or Chinese characters;
-    lines in the source are joined without a space where a Chinese character ends one."""
-    text = re.sub(r"(?<=[\u3000-\u303f\u4e00-\u9fff\uff00-\uffef])\s*\n\s*", "", text)
+    lines in the source are joined as Chinese is written (_join)."""
+    text = _join(text)
     lines, line = [], []
     for token in TOKEN.findall(" ".join(text.split())):
         if token.isspace():

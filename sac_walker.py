@@ -26,13 +26,14 @@ curve.png, inside.png, and checkpoint.pt, from which --resume continues the run 
     python sac_walker.py --resume runs/latest      # continue a stopped or killed run exactly
     python sac_walker.py --eval runs/latest/best.pt --watch    # replay a saved actor
 
-中文导读：SAC（柔性演员-评论员）保留 TD3 的两个评论员，换上随机策略，并把策略的熵计入回报
-（最大熵强化学习）。与 TD3 的不同：一、演员输出高斯分布，采样后经 tanh 压缩到动作范围；用
-重参数化采样，梯度能穿过采样传回演员；对数概率要减去 tanh 的雅可比修正。二、软 TD 目标：两个
-目标评论员中较小的 Q 减去 α·log π(a'|s')，a' 从当前策略采样，没有目标演员。三、演员最大化
-min(Q1, Q2) 加 α 倍的熵，每步都更新。四、温度系数 α 自动调节，使熵保持在目标熵 -dim(A)
-附近（--alpha 0.2 则固定 α）。探索靠策略自身的随机性，不另加噪声。建议先读 DDPG 与 TD3
-（教程 003 与 README.zh-CN.md 的路线三），再用 diff 对照这几处修改。
+中文导读：SAC（柔性演员-评论员）保留 TD3 的两个评论员，换上随机策略，并把策略的熵算进回报
+（最大熵强化学习）。和 TD3 相比有四处不同。一、演员输出高斯分布，采样后用 tanh 压缩到动作范围；
+采样用重参数化，梯度能穿过采样传回演员；对数概率要减去 tanh 的雅可比修正。二、软 TD 目标：两个
+目标评论员中较小的 Q 减去 α log π(a′|s′)，a′ 从当前策略采样；没有目标演员。三、演员的目标是
+让 min(Q1, Q2) 加上 α 倍的熵最大，每一步都更新，不延迟。四、温度系数 α 自动调节，让熵保持在
+目标熵 −dim(A) 附近（--alpha 0.2 则把 α 固定下来）。探索靠策略自身的随机性，不另加噪声。建议
+先读 DDPG 和 TD3（教程 003，以及 README.zh-CN.md 的路线三和其后的 TD3 一节），再用 diff 对照
+这几处修改。
 """
 
 import copy

@@ -106,7 +106,7 @@ def returns_cases():
     env0 = flags([False, False], [True, False], [False, False])
     return [
         (tr("no episode ends: bootstrap with V(s_3) = 4 at the rollout's end",
-            "没有回合结束：在 rollout 的末尾用 V(s_3) = 4 自举"),
+            "没有回合结束：在这批数据的末尾用 V(s_3) = 4 自举"),
          (r, v, no, no, 0.5), t([2.25, 2.25], [2.5, 2.5], [3.0, 3.0])),
         (tr("terminated at t = 1 (both envs): no future after it",
             "t = 1 处终止（两个环境都是）：之后没有未来"),
@@ -386,7 +386,7 @@ def a2c_targets_mistakes(rollout, values, last):
                 "next_values = values：用了 V(s_t)，应该是 V(s_{t+1})（没有错开一步）"),
              with_next(values)),
             (tr("no bootstrap at the rollout's end: V(next_obs) replaced by 0",
-                "rollout 末尾没有自举：V(next_obs) 换成了 0"),
+                "这批数据的末尾没有自举：V(next_obs) 换成了 0"),
              with_next(torch.cat([values[1:], torch.zeros_like(last)[None]]))),
             (tr("shifted the wrong way: V(next_obs) put first, torch.cat([last, values[:-1]])",
                 "错开的方向反了：把 V(next_obs) 放在了最前面，torch.cat([last, values[:-1]])"),
@@ -628,7 +628,7 @@ def td3_cases():
               "box's edge, |a~ - mu'| = 3", "噪声没有裁剪到 [-c, c]：sigma = 10000 时，a~ 落在动作范围的"
               "边上，|a~ - mu'| = 3"), t(7.0, 8.0, 1.0))]),
         (tr("the same noise, the action box [-0.5, 0.5]: a~ = +-1 clipped into the box, to +-0.5",
-            "同样的噪声，动作范围 [-0.5, 0.5]：a~ = +-1 要限制到范围内，成为 +-0.5"),
+            "同样的噪声，动作范围 [-0.5, 0.5]：a~ = ±1 要限制到范围内，成为 ±0.5"),
          (1e4, 0.5, [-0.5], [0.5]), t(2.625, 2.25, 1.0),
          [(tr("a~ not clipped into the action box [low, high]", "a~ 没有限制在动作范围 [low, high] 内"),
            t(3.0, 3.0, 1.0))]),
@@ -691,7 +691,7 @@ def compare(name, got, expected):
                             f"{name}：第一个不同在下标 {i}：应该是 {expected[i].item():.6g}，"
                             f"得到的是 {got[i].item():.6g}{also}")
                          + tr("\n  expected ", "\n  应该是 ") + str(rounded(expected))
-                         + tr("\n  got      ", "\n  得到的 ") + str(rounded(got)))
+                         + tr("\n  got      ", "\n  得到的是 ") + str(rounded(got)))
         return
     if not isinstance(got, (int, float)) or abs(float(got) - float(expected)) > 1e-5:
         raise Failed(tr(f"{name}: expected {expected:.6g}, got {got!r}",
@@ -856,7 +856,7 @@ def gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=True, cut_at_trunc=T
 
 def returns_mistakes(r, nv, term, trunc, gamma):
     return [(tr("no bootstrap at the rollout's end (after step T - 1 the future is V(s_T), not 0)",
-                "rollout 末尾没有自举（第 T - 1 步之后的未来是 V(s_T)，不是 0）"),
+                "这批数据的末尾没有自举（第 T - 1 步之后的未来是 V(s_T)，不是 0）"),
              returns_with(r, nv, term, trunc, gamma, cut=False)),
             (tr("a time-limit truncation treated as a termination (no bootstrap there)",
                 "把时间截断当成了终止（那里没有自举）"),
@@ -1094,7 +1094,7 @@ def real_loop(ex, fn):
         except Exception as e:  # noqa: BLE001  the learner's error, named in one line
             raise Failed(tr(f"in {ex.script}.train(), at call {calls[0]} of your function: ",
                             f"在 {ex.script}.train() 里，你的函数第 {calls[0]} 次被调用时出错：")
-                         + f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}")
+                         + error(e, first_line=True))
     if calls[0] == 0:
         raise never_called(ex, tr("stage (b)", "第 (b) 关"))
     unit = tr("step", "第 {} 步") if ex.script in ("ddpg_walker", "td3_walker") else tr(
@@ -1143,8 +1143,8 @@ def learns(ex, fn):
             raise Failed(tr(
                 f"held-out pass@1 after GRPO is {after:.3f} (from {before:.3f} after supervision), "
                 f"under {GRPO_BAR} (the script's own: 0.94 to 0.96 on seeds 0-4)",
-                f"GRPO 之后留出题的 pass@1 是 {after:.3f}（监督学习之后是 {before:.3f}），低于 "
-                f"{GRPO_BAR}（脚本自己的在种子 0-4 上是 0.94 到 0.96）"))
+                f"GRPO 之后留出题目上的 pass@1 是 {after:.3f}（监督学习之后是 {before:.3f}），低于 "
+                f"{GRPO_BAR}（脚本自己的在种子 0 到 4 上是 0.94 到 0.96）"))
     elif "evaluations" in result:  # DDPG, TD3 on InvertedPendulum-v5: the pole held to the end
         means = [e["eval_mean"] for e in result["evaluations"]]
         last = means[-HOLD:]
@@ -1215,15 +1215,15 @@ EXERCISES = {ex.name: ex for ex in (
              lambda: tr("A2C's critic targets R_t come from your returns: the first update "
                         "that differs is\n  where your returns differ on real rollouts "
                         "(several envs, autoreset steps).",
-                        "A2C 评论员的目标 R_t 来自你的回报：第一次不同的更新，就是你的回报在真实"
-                        "\n  rollout 上（多个环境、自动重置步）开始不同的地方。"),
+                        "A2C 评论员的目标 R_t 来自你的回报：第一次不同的那次更新，就是你的回报在"
+                        "\n  真实采集的数据上（多个环境、自动重置步）开始不同的地方。"),
              outputs=("returns",), mistakes=returns_mistakes),
     exercise("gae", "ppo_cartpole", "gae", "common", gae_cases,
              dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
              lambda: tr("PPO's advantages and value targets come from your GAE: the first "
                         "update that\n  differs is where your GAE differs on real rollouts.",
-                        "PPO 的优势和价值目标来自你的 GAE：第一次不同的更新，就是你的 GAE 在"
-                        "\n  真实 rollout 上开始不同的地方。"), outputs=("advantages",),
+                        "PPO 的优势和价值目标来自你的 GAE：第一次不同的那次更新，就是你的 GAE 在"
+                        "\n  真实采集的数据上开始不同的地方。"), outputs=("advantages",),
              mistakes=gae_mistakes),
     exercise("clipped_surrogate", "ppo_cartpole", "compute_loss_pi", "ppo_cartpole",
              clip_cases, dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
@@ -1265,8 +1265,8 @@ EXERCISES = {ex.name: ex for ex in (
              lambda: tr("A2C's targets and advantages come from your function: the first update "
                         "that differs is\n  where they differ on real rollouts (several envs, "
                         "autoreset steps).",
-                        "A2C 的目标和优势来自你的函数：第一次不同的更新，就是它们在真实 rollout 上"
-                        "\n  （多个环境、自动重置步）开始不同的地方。"), outputs=("returns", "advantages")),
+                        "A2C 的目标和优势来自你的函数：第一次不同的那次更新，就是它们在真实采集的"
+                        "\n  数据上（多个环境、自动重置步）开始不同的地方。"), outputs=("returns", "advantages")),
     exercise("ddpg_update", "ddpg_walker", "ddpg_update", "ddpg_walker", lambda: [], DDPG_LOOP,
              DDPG_LEARN, OFF_POLICY, outputs=("critic_loss", "actor_loss")),
 )}
@@ -1289,8 +1289,24 @@ def load(name, path=None):
 
 
 def stage_names():
-    return (tr("(a) worked cases", "(a) 手算的例子"), tr("(b) the real loop", "(b) 真实的训练循环"),
-            tr("(c) learning", "(c) 学会任务"))
+    return (tr("(a) worked cases", "第 (a) 关“手算的例子”"),
+            tr("(b) the real loop", "第 (b) 关“真实的训练循环”"),
+            tr("(c) learning", "第 (c) 关“学会任务”"))
+
+
+def line(name, stage, verdict, why=""):
+    """One line of output: the exercise, the stage, its verdict and why, punctuated as the
+    language is (Chinese: full-width colons, no colon between the stage and its verdict)."""
+    if LANG == "zh":
+        return f"{name}：{stage}{verdict}" + (f"：{why}" if why else "")
+    return f"{name}: {stage}: {verdict}" + (f": {why}" if why else "")
+
+
+def error(e, first_line=False):
+    """An exception raised by the learner's code: its type, then its message (Python's own
+    words, in English), after the language's colon."""
+    text = str(e).splitlines()[0] if first_line and str(e) else str(e)
+    return f"{type(e).__name__}" + (tr(": ", "：") + text if text else "")
 
 
 def check(name, fn=None, learning=True, say=print):
@@ -1305,18 +1321,18 @@ def check(name, fn=None, learning=True, say=print):
         try:
             run(ex, fn)
         except NotImplementedError:
-            say(f"{name}: {stage}: {fail}: " + tr(
+            say(line(name, stage, fail, tr(
                 f"{NOT_WRITTEN} (fill in the blank in exercises/{name}.py)",
-                f"还没写（在 exercises/{name}.py 里填空）"))
+                f"还没写（在 exercises/{name}.py 里填空）")))
             return False
         except Failed as e:
-            say(f"{name}: {stage}: {fail}: {e}")
+            say(line(name, stage, fail, str(e)))
             return False
         except Exception as e:  # noqa: BLE001  the learner's code raised: name it
-            say(f"{name}: {stage}: {fail}: " + tr("your function raised ", "你的函数出错：")
-                + f"{type(e).__name__}: {e}")
+            say(line(name, stage, fail, tr("your function raised ", "你的函数抛出了 ") + error(e)))
             return False
-        say(f"{name}: {stage}: " + tr("pass", "通过") + f" ({time.time() - start:.1f} s)")
+        seconds = time.time() - start
+        say(line(name, stage, tr(f"pass ({seconds:.1f} s)", f"通过（{seconds:.1f} 秒）")))
     return True
 
 
@@ -1338,8 +1354,9 @@ def main(argv=None):
         lines = []
         passed = check(name, learning=False, say=lines.append)
         all_passed &= passed
-        stage, _, why = lines[-1].removeprefix(f"{name}: ").partition(f": {fail}: ")
-        verdict = (tr("(a) and (b) pass", "(a) 和 (b) 通过") if passed else
+        head, gap = (f"{name}：", f"{fail}：") if LANG == "zh" else (f"{name}: ", f": {fail}: ")
+        stage, _, why = lines[-1].removeprefix(head).partition(gap)  # as line() wrote it
+        verdict = (tr("(a) and (b) pass", "第 (a)、(b) 关都通过") if passed else
                    tr(f"FAIL at {stage}: ", f"{stage}未通过：") + why.splitlines()[0])
         if name in BUGS and not passed:  # where it fails would give the bug away
             verdict = tr("not fixed yet", "还没改好")

@@ -570,11 +570,32 @@ def test_a_loop_that_no_longer_calls_the_function_fails_loudly():
 
 
 @pytest.mark.quick
-def test_messages_in_chinese(capsys):
-    check.LANG = "zh"
+def test_messages_in_chinese(monkeypatch, capsys):
+    """In Chinese every line is Chinese, punctuated as Chinese is (full-width colons), the
+    table's lines included."""
+    monkeypatch.setattr(check, "LANG", "zh")
     passed, lines = run("td_target", compile_answer(WRONG["td_target"][0][0], "td_target"))
-    assert not passed and lines[-1].startswith("td_target: (a) 手算的例子: 未通过: 例子：r = (1, 2, 3)")
+    assert not passed and lines[-1].startswith(
+        "td_target：第 (a) 关“手算的例子”未通过：例子：r = (1, 2, 3)"), lines
     assert "第一个不同在下标 (1,)" in lines[-1]
+    monkeypatch.setattr(check, "real_loop", lambda ex, fn: None)  # (a) is enough to tell here
+    ex = check.EXERCISES["td_target"]
+    passed, lines = run("td_target", getattr(ex.owner(), ex.function))
+    assert passed and lines[0].startswith("td_target：第 (a) 关“手算的例子”通过（") \
+        and lines[0].endswith(" 秒）"), lines
+    passed, lines = run("td_target", lambda *args: 1 / 0)
+    assert lines == ["td_target：第 (a) 关“手算的例子”未通过：你的函数抛出了 "
+                     "ZeroDivisionError：division by zero"]
+    own = {name: getattr(ex.owner(), ex.function) for name, ex in check.EXERCISES.items()}
+    monkeypatch.setattr(check, "load", lambda name: own[name] if name != "gae" else blank)
+    with pytest.raises(SystemExit):
+        check.main(["--lang", "zh"])
+    table = capsys.readouterr().out.splitlines()
+    assert table[0].split() == ["discounted_returns", "第", "(a)、(b)", "关都通过"], table
+    assert table[1].split(maxsplit=1) == [
+        "gae", "第 (a) 关“手算的例子”未通过：还没写（在 exercises/gae.py 里填空）"], table
+    for text in lines + table:
+        assert ": " not in text and "FAIL" not in text and "pass" not in text, text
 
 
 @pytest.mark.slow

@@ -334,3 +334,6 @@ def test_chinese_lines_wrap_by_columns_and_keep_punctuation_with_its_word():
     assert help_zh._wrap_wide("一二三四五，六七", 10) == ["一二三四", "五，六七"]
     assert help_zh._wrap_wide("一二三四（五六", 10) == ["一二三四", "（五六"]
     assert help_zh._wrap_wide("用 Adam\n学习率，和\n中文", 12) == ["用 Adam 学习", "率，和中文"]
+    # a source line break: a space between Chinese and Latin text, none at full-width punctuation
+    assert help_zh._join("先读\nDDPG 和 TD3\n（教程 003\n和它；\nmin(Q)\n加") == \
+        "先读 DDPG 和 TD3（教程 003 和它；min(Q) 加"

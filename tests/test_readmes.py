@@ -198,7 +198,8 @@ def test_zh_hyperparameter_tables_match_each_config():
         "ddpg_walker.py": {"gamma", "tau", "batch_size", "buffer_size", "actor_lr", "critic_lr",
                            "expl_noise"},
         "td3_walker.py": {"policy_delay", "target_noise", "noise_clip"},  # TD3's own flags
-        "sac_walker.py": {"alpha", "alpha_lr", "target_entropy"}}  # SAC's own flags
+        "sac_walker.py": {"alpha", "alpha_lr", "target_entropy"},  # SAC's own flags
+        "dqn_cartpole.py": {"double", "target_update_interval", "train_freq", "eps_end"}}  # DQN's
     for script, names in seen.items():
         twice = {name for name in names if names.count(name) > 1}
         assert not twice, f"{script}: twice in the tables {twice}"
