@@ -79,8 +79,7 @@ class ActorCritic(nn.Module):
 
 @dataclass
 class Config(cli.SolvedFlags):
-    """The algorithm's settings; the flags every script shares (--run-dir, --gifs, --eval,
-    --watch, --threads, ...) and the solved rule's come from cli.SolvedFlags."""
+    """The algorithm's settings; the shared flags (--run-dir, --eval, ...): cli.SolvedFlags."""
     # --- experiment ---
     env_id: str = "CartPole-v1"
     """gymnasium id of an env with a Box observation and Discrete actions"""
@@ -122,11 +121,10 @@ class Config(cli.SolvedFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        cli.check_ranges(
-            self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0", hidden="> 0",
-            learning_rate="> 0", ent_coef=">= 0", vf_coef=">= 0", max_grad_norm=">= 0",
-            gamma="(0, 1]", lam="[0, 1] or none", reward_scale="> 0 or none",
-            running_reward_alpha="(0, 1]")
+        cli.check_ranges(self, total_timesteps="> 0", num_envs="> 0", num_steps="> 0",
+                         hidden="> 0", learning_rate="> 0", ent_coef=">= 0", vf_coef=">= 0",
+                         max_grad_norm=">= 0", gamma="(0, 1]", lam="[0, 1] or none",
+                         reward_scale="> 0 or none", running_reward_alpha="(0, 1]")
         batch = self.num_envs * self.num_steps
         cli.check(self.total_timesteps >= batch, f"--total-timesteps ({self.total_timesteps})"
                   f" is less than one rollout (num_envs x num_steps = {batch})")
@@ -196,6 +194,7 @@ def a2c_loss(model, data, cfg):
     loss_v = 0.5 * ((values - ret) ** 2).mean()
     # Entropy bonus H(pi(.|s)) = -sum_a pi log pi (Mnih et al. 2016, section 4): keeps exploring.
     entropy = dist.entropy().mean()
+    # One loss, one backward: the shared layer learns from both heads, vf_coef weighing them.
     loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
     # How well V fits its targets: 1 - Var(R - V) / Var(R) (1: exactly; 0: no better than their
     # mean); V and R themselves are kept for inside.png.
@@ -213,8 +212,7 @@ SMOKE = dict(total_timesteps=2048, stop_when_solved=False, eval_episodes=2)  # t
 
 
 def pictures(cfg):
-    """curve.png: pi's entropy below the returns; inside.png (docs/inside.md): the share of its
-    targets' variance V explains, and V(s_t) against its targets R_t at three updates."""
+    """curve.png: pi's entropy; inside.png (docs/inside.md): explained variance, V(s_t) vs R_t."""
     return dict(curve=[[plots.lines("entropy")]], inside=[[
         plots.lines("explained_var", ylim=(-1, 1.05), title="1 - Var(R - V) / Var(R)"),
         plots.scatters("ret", "values", "target R_t", "V(s_t)")]])
@@ -243,8 +241,7 @@ def train(cfg: Config):
     num_updates = cfg.total_timesteps // (T * N)
     default_scale = 1 - cfg.gamma if cfg.gamma < 1 else 1.0
     reward_scale = cfg.reward_scale if cfg.reward_scale is not None else default_scale
-    # The run folder: progress.csv, a progress line with these numbers every print_every updates
-    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED)
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED)  # the run folder, progress.csv, progress lines
     play = report.sampled_and_greedy(lambda x: model(x)[0], device)  # checks, evaluations, GIF
 
     # In NEXT_STEP autoreset mode, the step after an episode ends is a reset step: its action
