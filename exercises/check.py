@@ -537,6 +537,40 @@ def check_ddpg_update(fn):
         compare("actor_loss", got[1], expected[1])
     except Failed as e:
         raise Failed(case + str(e) + swapped_steps) from None
+    # A second update on another minibatch, right after: what the first left in a .grad shows
+    # here. The actor's backward without inputs= fills the critic's .grad too; harmless when
+    # the critic's step zeroes it first (as the script's does), not when it is zeroed after.
+    leftover = any(p.grad is not None and (q.grad is None or not torch.allclose(p.grad, q.grad))
+                   for p, q in zip(yours["critic"].parameters(), theirs["critic"].parameters()))
+    gen = torch.Generator().manual_seed(1)
+    batch2 = (torch.randn(4, 3, generator=gen), torch.rand(4, 1, generator=gen) * 4 - 2,
+              torch.randn(4, generator=gen), torch.randn(4, 3, generator=gen),
+              t(1.0, 1.0, 0.0, 1.0))
+    expected, got = own(*theirs.values(), batch2, cfg), fn(*yours.values(), batch2, cfg)
+    case = tr("case: a second update right after the first, on another minibatch (the fourth "
+              "sample terminated)\n  ", "例子：紧接着第一次之后的第二次更新，换一个小批量（第四个样本"
+              "终止）\n  ")
+    for name, what in steps:
+        for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
+            if not torch.allclose(p, q, atol=1e-6):
+                named = tr(
+                    "\n  the first update left the actor's gradient in the critic's .grad (its "
+                    "backward without inputs=),\n  and the critic's next step added it in: "
+                    "backward(inputs=list(actor.parameters())), or\n  critic_opt.zero_grad() "
+                    "right before critic_loss.backward()",
+                    "\n  第一次更新把演员的梯度留在了评论员的 .grad 里（backward 没有写 inputs=），"
+                    "\n  评论员下一步更新时把它也加了进去：用 backward(inputs=list(actor.parameters()))，"
+                    "\n  或者紧挨着 critic_loss.backward() 之前调用 critic_opt.zero_grad()"
+                ) if name == "critic" and leftover else ""
+                raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
+                                       f"(largest difference {gap(p, q):.3g})",
+                                       f"{what}：{pname} 和脚本自己的不同（最大相差 "
+                                       f"{gap(p, q):.3g}）") + named)
+    try:
+        compare("critic_loss", got[0], expected[0])
+        compare("actor_loss", got[1], expected[1])
+    except Failed as e:
+        raise Failed(case + str(e)) from None
 
 
 def check_soft_update(fn):

@@ -437,6 +437,23 @@ WRONG = {
                 soft_update(critic_target, critic, cfg.tau)
                 # the actor's target forgotten
                 return critic_loss.detach(), actor_loss.detach()""", "(a)", "the actor's target after the soft update"),
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_loss.backward()
+                critic_opt.step()
+                critic_opt.zero_grad()  # zeroed after the step, not before the backward
+                actor_loss = compute_loss_actor(actor, critic, obs)
+                actor_loss.backward()  # no inputs=: the critic's .grad keeps this till its next step
+                actor_opt.step()
+                actor_opt.zero_grad()
+                soft_update(critic_target, critic, cfg.tau)
+                soft_update(actor_target, actor, cfg.tau)
+                return critic_loss.detach(), actor_loss.detach()""", "(a)",
+         "left the actor's gradient in the critic's .grad"),
     ],
     "ddpg_store_step": [
         ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
@@ -632,6 +649,31 @@ def test_the_table_exits_0_only_when_every_exercise_passes(monkeypatch, capsys):
 
 def blank(*args):
     raise NotImplementedError("not written yet")
+
+
+NO_INPUTS = """def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+    from ddpg_walker import compute_loss_actor, soft_update, td_target
+    obs, action, reward, next_obs, not_done = batch
+    with torch.no_grad():
+        y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+    critic_loss = F.mse_loss(critic(obs, action), y)
+    critic_opt.zero_grad()
+    critic_loss.backward()
+    critic_opt.step()
+    actor_loss = compute_loss_actor(actor, critic, obs)
+    actor_opt.zero_grad()
+    actor_loss.backward()  # no inputs=: the critic's .grad is filled too, and zeroed before its use
+    actor_opt.step()
+    soft_update(critic_target, critic, cfg.tau)
+    soft_update(actor_target, actor, cfg.tau)
+    return critic_loss.detach(), actor_loss.detach()"""
+
+
+def test_a_harmless_difference_passes_the_worked_cases():
+    """The actor's backward without inputs= fills the critic's .grad as well, and the critic's
+    next step zeroes it before its own backward: the same numbers, so (a) passes it (its twin
+    that zeroes the critic after the step fails: WRONG["ddpg_update"])."""
+    check.worked_cases(check.EXERCISES["ddpg_update"], compile_answer(NO_INPUTS, "ddpg_update"))
 
 
 def test_a_loop_that_no_longer_calls_the_function_fails_loudly():
