@@ -699,6 +699,8 @@ def check_td3_target(fn):
 def as_list(x):
     """A returned obs or mask as plain numbers, or None if it is not one (a tuple from
     env.reset(), say)."""
+    if x is None:
+        return None
     try:
         return np.asarray(x, dtype=np.float64).tolist()
     except (TypeError, ValueError):
@@ -736,6 +738,11 @@ def ddpg_store_mistake(key, got, want, term, trunc):
                   "is not terminal, and its target must bootstrap from Q'(s', mu'(s'))",
                   "把 terminated or truncated 当成回合结束存了：时间截断不是终止，它的目标还要用 "
                   "Q'(s', mu'(s')) 自举")
+    if key == "not_done" and not term and got["not_done"] == 0.0 and not trunc:
+        return tr("the flag the other way round: buffer.add takes terminated (True where the "
+                  "episode ended) and stores not_done = 1 - terminated itself",
+                  "标志反了：buffer.add 接收的是 terminated（回合结束时为 True），它自己会存 "
+                  "not_done = 1 - terminated")
     if key == "not_done" and term and got["not_done"] == 1.0:
         return tr("the termination not stored (not_done = 1 after the pole fell): the target "
                   "would add a future after the episode really ended",
@@ -753,6 +760,9 @@ def ddpg_store_mistake(key, got, want, term, trunc):
     if key == "next_obs" and got["next_obs"] == s:
         return tr("obs stored as s' too: s' is next_obs", "把 obs 也存成了 s'：s' 是 next_obs")
     if key == "returned":
+        if got["raw"] is None:
+            return tr("nothing returned: the loop needs the obs its next action is chosen in",
+                      "没有返回值：循环需要知道下一个动作在哪个观测上选")
         if isinstance(got["raw"], tuple) and len(got["raw"]) == 2:
             return tr("env.reset() returns (obs, info): the obs is its first item, "
                       "obs, _ = env.reset()", "env.reset() 返回的是 (obs, info)：观测是第一项，"
@@ -863,6 +873,10 @@ def ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset, stored_trunc
             return tr("the autoreset step not masked: the reset step's ignored action and 0 "
                       "reward would train pi (valid = ~autoreset)", "没有掩掉自动重置步：重置步"
                       "被忽略的动作和 0 奖励会拿去训练 pi（valid = ~autoreset）")
+        if np.array_equal(got, autoreset):
+            return tr("valid = autoreset: the mask says where the reset steps are, valid where "
+                      "the rows train (valid = ~autoreset)", "valid = autoreset：掩码标的是重置步"
+                      "在哪里，valid 标的是哪些行拿去训练（valid = ~autoreset）")
         if np.array_equal(got, ~done):
             return tr("the step that ended the episode masked, not the reset step after it: "
                       "valid = ~autoreset, the previous step's flags",
@@ -887,6 +901,11 @@ def ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset, stored_trunc
         if got == as_list(~done):
             return tr("the mask the wrong way round: True where the next step is a reset step",
                       "掩码反了：下一步是重置步的地方才是 True")
+        if got == as_list(autoreset | done):
+            return tr("the mask kept from the steps before (autoreset | ...): only this step's "
+                      "flags say where step t + 1 is a reset step",
+                      "把之前的掩码也留下来了（autoreset | ...）：第 t + 1 步是不是重置步，只看这一步"
+                      "的标志")
     return ""
 
 

@@ -491,6 +491,11 @@ WRONG = {
                 if terminated or truncated:
                     next_obs = env.reset()  # gym's old API
                 return next_obs""", "(a)", "env.reset() returns (obs, info)"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, not terminated)  # not_done passed in
+                if terminated or truncated:
+                    next_obs, _ = env.reset()
+                return next_obs""", "(a)", "the flag the other way round"),
     ],
     "ppo_rollout_step": [
         ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
@@ -528,6 +533,15 @@ WRONG = {
                                   autoreset):
                 buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset)
                 return obs, terminated | truncated""", "(a)", "obs not advanced"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=autoreset)
+                return next_obs, terminated | truncated""", "(a)", "valid = autoreset"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset)
+                return next_obs, autoreset | terminated | truncated  # the mask kept""", "(a)",
+         "the mask kept from the steps before"),
     ],
     "soft_update": [
         ("""def soft_update(target, source, tau):
