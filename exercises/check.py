@@ -729,7 +729,7 @@ def ddpg_store_cases():
                 "同一步既终止又时间截断：按终止算，not_done = 0"), True, True, 0.0)]
 
 
-def ddpg_store_mistake(key, got, want, term, trunc):
+def ddpg_store_mistake(key, got, term, trunc):
     """The name of the mistake a differing field shows, or ''."""
     s, s2, first = [1.0, 2.0], [3.0, 4.0], ResetCounter.FIRST
     ended = term or trunc
@@ -809,7 +809,7 @@ def check_ddpg_store(fn):
             if got[key] != value:
                 label = field.get(key, tr(f"the stored {key}", f"存下的 {key}"))
                 shown = got[key] if got[key] is not None else repr(out)
-                named = ddpg_store_mistake(key, got, want, term, trunc)
+                named = ddpg_store_mistake(key, got, term, trunc)
                 raise Failed(
                     tr("case: ", "例子：") + tr(
                         f"s = [1, 2], a = [0.5], r = 1.5, s' = [3, 4], {what}; env.reset() gives "
