@@ -188,6 +188,20 @@ class ReplayBuffer:
                 self.not_done[idx])
 
 
+def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+    """Store the transition (s, a, r, s', terminated) and return the obs the next action is
+    chosen in: s', or a new episode's first obs once this one has ended.
+
+    One env, reset by hand: no autoreset step. E.g. a time limit at s' = [0.3]: the buffer
+    gets ([0.1], a, r, [0.3], not_done = 1), and the next action starts from env.reset()."""
+    # terminated, not (terminated or truncated): a time-limit truncation is not terminal,
+    # so its target still bootstraps from Q'(s', mu'(s')) (see ReplayBuffer.add)
+    buffer.add(obs, action, reward, next_obs, terminated)
+    if terminated or truncated:  # the episode is over either way: the next one starts afresh
+        next_obs, _ = env.reset()
+    return next_obs  # obs = next_obs: the transition is stored; the next action starts here
+
+
 @torch.no_grad()
 def soft_update(target, source, tau):
     """theta' <- tau * theta + (1 - tau) * theta'  (Lillicrap et al. 2016, Algorithm 1)."""
@@ -303,12 +317,11 @@ def train(cfg: Config):
                     action = torch.clamp(a, low_t, high_t).cpu().numpy()
             next_obs, reward, terminated, truncated, info = env.step(action)
 
-            # --- store: with terminated, not truncated (see ReplayBuffer.add) ---
-            buffer.add(obs, action, reward, next_obs, terminated)
-            obs = next_obs  # the transition is stored; the next action starts from here
+            # --- store (s, a, r, s', terminated), then move on to s' (or a new episode's s) ---
+            obs = store_and_advance(env, buffer, obs, action, reward, next_obs, terminated,
+                                    truncated)
             if terminated or truncated:
                 run.episode_ended(global_step, info["episode"]["r"])  # its return, episodes.csv
-                obs, _ = env.reset()
 
             # --- learn: one critic and one actor update per env step ---
             if learning:

@@ -174,6 +174,24 @@ class RolloutBuffer:
         return {name: torch.as_tensor(array, device=device) for name, array in vars(self).items()}
 
 
+def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                      autoreset):
+    """Store step t of the N envs and return what step t + 1 starts from: (the obs its
+    actions are chosen in, which of its envs are at an autoreset step), each (N, ...).
+
+    NEXT_STEP autoreset (gymnasium 1.x's vector envs): the step after an episode ends is a
+    reset step: its action is ignored, its reward is 0, its obs the new episode's first.
+    E.g. env 0 hits the time limit at step t: row t stores terminated False, truncated True;
+    row t + 1 stores that episode's real final obs (next_obs at t) with valid False. GAE reads
+    it as V(s_{t+1}) and bootstraps from it, and the update drops row t + 1."""
+    # The trap of every hand-written loop: the action (and its value) belong to obs;
+    # next_obs is only where they led. terminated and truncated are kept apart: GAE
+    # bootstraps at a time-limit truncation only (common.gae). valid = ~autoreset: the
+    # previous step ended an episode, so this one is a reset step and trains nothing.
+    buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset)
+    return next_obs, terminated | truncated  # obs = next_obs; where one ended, a reset step next
+
+
 def compute_loss_pi(policy, data, beta):
     """KL-penalized surrogate loss on a batch `data`: (loss_pi, entropy of pi, info with kl).
     Why: the ratio reweights pi_old's samples so that several epochs can reuse them (L_CPI,
@@ -274,8 +292,8 @@ def train(cfg: Config):
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
-    envs, next_obs, threshold = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed,
-                                                    cfg.solved_return)
+    envs, obs, threshold = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed,
+                                               cfg.solved_return)
     obs_dim = int(envs.single_observation_space.shape[0])
     n_actions = int(envs.single_action_space.n)
     T, N = cfg.num_steps, cfg.num_envs
@@ -307,17 +325,16 @@ def train(cfg: Config):
 
             # --- collect: T steps of N envs with the current policy (pi_old) ---
             for t in range(T):
-                # obs = next_obs: the trap of every hand-written loop. The action (and its
-                # value) belong to obs; next_obs is only where they led.
-                obs = next_obs  # as the env gives it: no normalization (a simplification)
+                # obs as the env gives it: no normalization (a simplification)
                 with torch.no_grad():
                     logits = policy(torch.as_tensor(obs, dtype=torch.float32, device=device))
                 action = Categorical(logits=logits).sample().cpu().numpy()  # a ~ pi(.|s), (N,)
                 next_obs, reward, terminated, truncated, info = envs.step(action)
                 global_step += N
-                buffer.store(t, obs, action, cfg.reward_scale * reward, terminated, truncated,
-                             valid=~autoreset)
-                autoreset = terminated | truncated
+                # store step t (a reset step masked), then move on: obs = next_obs
+                obs, autoreset = store_and_advance(buffer, t, obs, action,
+                                                   cfg.reward_scale * reward, next_obs,
+                                                   terminated, truncated, autoreset)
                 run.episodes_ended(info, global_step)
                 # Solved when the mean return of the last solved_window episodes reaches the
                 # threshold; then pi as it is now must too (at most one check per update)
@@ -339,7 +356,7 @@ def train(cfg: Config):
                 # V(s_{t+1}) is the value of the next stored obs. After a done step that is the
                 # reset step's obs: the finished episode's real final observation (the done step
                 # returned it), so a truncated step bootstraps from it, a terminated one does not.
-                last_value = value_net(torch.as_tensor(next_obs, dtype=torch.float32,
+                last_value = value_net(torch.as_tensor(obs, dtype=torch.float32,
                                                        device=device))  # V(s_T), (N,)
                 next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
                 # TD error  delta_t = r_t + gamma * V(s_{t+1}) * (1 - terminated_t) - V(s_t)

@@ -38,6 +38,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE.parent / "experiments"))
 
+import numpy as np  # noqa: E402
 import torch  # noqa: E402
 import torch.nn.functional as F  # noqa: E402
 from torch.distributions import Categorical, kl_divergence  # noqa: E402  (the mistakes' values)
@@ -536,6 +537,40 @@ def check_ddpg_update(fn):
         compare("actor_loss", got[1], expected[1])
     except Failed as e:
         raise Failed(case + str(e) + swapped_steps) from None
+    # A second update on another minibatch, right after: what the first left in a .grad shows
+    # here. The actor's backward without inputs= fills the critic's .grad too; harmless when
+    # the critic's step zeroes it first (as the script's does), not when it is zeroed after.
+    leftover = any(p.grad is not None and (q.grad is None or not torch.allclose(p.grad, q.grad))
+                   for p, q in zip(yours["critic"].parameters(), theirs["critic"].parameters()))
+    gen = torch.Generator().manual_seed(1)
+    batch2 = (torch.randn(4, 3, generator=gen), torch.rand(4, 1, generator=gen) * 4 - 2,
+              torch.randn(4, generator=gen), torch.randn(4, 3, generator=gen),
+              t(1.0, 1.0, 0.0, 1.0))
+    expected, got = own(*theirs.values(), batch2, cfg), fn(*yours.values(), batch2, cfg)
+    case = tr("case: a second update right after the first, on another minibatch (the fourth "
+              "sample terminated)\n  ", "例子：紧接着第一次之后的第二次更新，换一个小批量（第四个样本"
+              "终止）\n  ")
+    for name, what in steps:
+        for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
+            if not torch.allclose(p, q, atol=1e-6):
+                named = tr(
+                    "\n  the first update left the actor's gradient in the critic's .grad (its "
+                    "backward without inputs=),\n  and the critic's next step added it in: "
+                    "backward(inputs=list(actor.parameters())), or\n  critic_opt.zero_grad() "
+                    "right before critic_loss.backward()",
+                    "\n  第一次更新把演员的梯度留在了评论员的 .grad 里（backward 没有写 inputs=），"
+                    "\n  评论员下一步更新时把它也加了进去：用 backward(inputs=list(actor.parameters()))，"
+                    "\n  或者紧挨着 critic_loss.backward() 之前调用 critic_opt.zero_grad()"
+                ) if name == "critic" and leftover else ""
+                raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
+                                       f"(largest difference {gap(p, q):.3g})",
+                                       f"{what}：{pname} 和脚本自己的不同（最大相差 "
+                                       f"{gap(p, q):.3g}）") + named)
+    try:
+        compare("critic_loss", got[0], expected[0])
+        compare("actor_loss", got[1], expected[1])
+    except Failed as e:
+        raise Failed(case + str(e)) from None
 
 
 def check_soft_update(fn):
@@ -656,6 +691,274 @@ def check_td3_target(fn):
             raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
                 "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
                 + named[0] if named else "")) from None
+
+
+# ---- the store-and-advance steps (loop exercises): the buffer's rows and what the loop gets back
+
+
+def as_list(x):
+    """A returned obs or mask as plain numbers, or None if it is not one (a tuple from
+    env.reset(), say)."""
+    if x is None:
+        return None
+    try:
+        return np.asarray(x, dtype=np.float64).tolist()
+    except (TypeError, ValueError):
+        return None
+
+
+class ResetCounter:
+    """An env as DDPG's loop resets it: counts the resets, gives the new episode's first obs."""
+    FIRST = [9.0, 9.0]
+
+    def __init__(self):
+        self.resets = 0
+
+    def reset(self, seed=None, options=None):
+        self.resets += 1
+        return np.array(self.FIRST), {}
+
+
+def ddpg_store_cases():
+    # (what, terminated, truncated, not_done stored)
+    return [(tr("no episode ends", "回合没有结束"), False, False, 1.0),
+            (tr("terminated (the pole fell)", "终止（杆倒了）"), True, False, 0.0),
+            (tr("truncated (the time limit): not terminal, so not_done = 1",
+                "时间截断：不是终止，所以 not_done = 1"), False, True, 1.0),
+            (tr("terminated and truncated at once: terminated, not_done = 0",
+                "同一步既终止又时间截断：按终止算，not_done = 0"), True, True, 0.0)]
+
+
+def ddpg_store_mistake(key, got, term, trunc):
+    """The name of the mistake a differing field shows, or ''."""
+    s, s2, first = [1.0, 2.0], [3.0, 4.0], ResetCounter.FIRST
+    ended = term or trunc
+    if key == "not_done" and trunc and not term and got["not_done"] == 0.0:
+        return tr("terminated or truncated stored as the episode's end: a time-limit truncation "
+                  "is not terminal, and its target must bootstrap from Q'(s', mu'(s'))",
+                  "把 terminated or truncated 当成回合结束存了：时间截断不是终止，它的目标还要用 "
+                  "Q'(s', mu'(s')) 自举")
+    if key == "not_done" and not term and got["not_done"] == 0.0 and not trunc:
+        return tr("the flag the other way round: buffer.add takes terminated (True where the "
+                  "episode ended) and stores not_done = 1 - terminated itself",
+                  "标志反了：buffer.add 接收的是 terminated（回合结束时为 True），它自己会存 "
+                  "not_done = 1 - terminated")
+    if key == "not_done" and term and got["not_done"] == 1.0:
+        return tr("the termination not stored (not_done = 1 after the pole fell): the target "
+                  "would add a future after the episode really ended",
+                  "没有存下终止（杆倒了之后 not_done 还是 1）：目标会在回合真正结束之后还加上未来")
+    if key == "obs" and got["obs"] == s2:
+        return (tr("obs and next_obs swapped: s is where the action was chosen, s' where it led",
+                   "obs 和 next_obs 弄反了：s 是选动作的地方，s' 是动作到达的地方")
+                if got["next_obs"] == s else
+                tr("next_obs stored as s: the action was chosen in obs",
+                   "把 next_obs 存成了 s：动作是在 obs 上选的"))
+    if key == "next_obs" and got["next_obs"] == first:
+        return tr("the new episode's first obs stored as s': the env was reset before the "
+                  "transition was stored (s' is the obs this step led to)",
+                  "把新回合的第一个观测存成了 s'：先重置了环境，才存这个转移（s' 是这一步到达的观测）")
+    if key == "next_obs" and got["next_obs"] == s:
+        return tr("obs stored as s' too: s' is next_obs", "把 obs 也存成了 s'：s' 是 next_obs")
+    if key == "returned":
+        if got["raw"] is None:
+            return tr("nothing returned: the loop needs the obs its next action is chosen in",
+                      "没有返回值：循环需要知道下一个动作在哪个观测上选")
+        if isinstance(got["raw"], tuple) and len(got["raw"]) == 2:
+            return tr("env.reset() returns (obs, info): the obs is its first item, "
+                      "obs, _ = env.reset()", "env.reset() 返回的是 (obs, info)：观测是第一项，"
+                      "obs, _ = env.reset()")
+        if got["returned"] == s:
+            return tr("obs not advanced (obs = next_obs left out): the next action would be "
+                      "chosen in s again", "观测没有前进（漏了 obs = next_obs）：下一个动作还会在 s 上选")
+        if ended and got["returned"] == s2:
+            return (tr("no new episode after a time-limit truncation: the episode is over, "
+                       "though not terminal (reset on terminated or truncated)",
+                       "时间截断之后没有开始新回合：回合已经结束了，虽然不是终止（terminated 或 "
+                       "truncated 都要重置）") if trunc and not term else
+                    tr("no new episode after the episode ended: the next action would continue "
+                       "a finished episode (env.reset())",
+                       "回合结束之后没有开始新回合：下一个动作会接着一个已经结束的回合（env.reset()）"))
+        if ended and got["resets"] == 1 and got["returned"] != first:
+            return tr("the env was reset, and the new episode's first obs not returned",
+                      "重置了环境，却没有返回新回合的第一个观测")
+    if key == "resets" and not ended and got["resets"]:
+        return tr("a reset where no episode ended", "回合没有结束，却重置了环境")
+    return ""
+
+
+def check_ddpg_store(fn):
+    ddpg = importlib.import_module("ddpg_walker")
+    action, reward = [0.5], 1.5
+    for what, term, trunc, not_done in ddpg_store_cases():
+        env, buffer = ResetCounter(), ddpg.ReplayBuffer(2, 1, 4, "cpu")
+        out = fn(env, buffer, np.array([1.0, 2.0]), np.array(action), reward,
+                 np.array([3.0, 4.0]), term, trunc)
+        ended = term or trunc
+        want = dict(stored=1, obs=[1.0, 2.0], action=action, reward=reward, next_obs=[3.0, 4.0],
+                    not_done=not_done, returned=ResetCounter.FIRST if ended else [3.0, 4.0],
+                    resets=int(ended))
+        got = dict(stored=buffer.size, obs=buffer.obs[0].tolist(),
+                   action=buffer.action[0].tolist(), reward=float(buffer.reward[0]),
+                   next_obs=buffer.next_obs[0].tolist(), not_done=float(buffer.not_done[0]),
+                   returned=as_list(out), resets=env.resets, raw=out)
+        field = dict(stored=tr("transitions stored", "存下的转移数"),
+                     returned=tr("the obs returned (where the next action is chosen)",
+                                 "返回的观测（下一个动作在这里选）"),
+                     resets=tr("env.reset() calls", "env.reset() 调用次数"))
+        for key, value in want.items():
+            if got[key] != value:
+                label = field.get(key, tr(f"the stored {key}", f"存下的 {key}"))
+                shown = got[key] if got[key] is not None else repr(out)
+                named = ddpg_store_mistake(key, got, term, trunc)
+                raise Failed(
+                    tr("case: ", "例子：") + tr(
+                        f"s = [1, 2], a = [0.5], r = 1.5, s' = [3, 4], {what}; env.reset() gives "
+                        f"[9, 9]", f"s = [1, 2]，a = [0.5]，r = 1.5，s' = [3, 4]，{what}；"
+                        f"env.reset() 给出 [9, 9]")
+                    + f"\n  {label}" + tr(f": expected {value}, got {shown}",
+                                            f"：应该是 {value}，得到的是 {shown}")
+                    + (tr("\n  this is exactly what this mistake gives: ",
+                          "\n  这正是这个错误会得到的值：") + named if named else ""))
+
+
+def ppo_rollout_case():
+    """3 envs, 4 steps. env 0 hits the time limit at t = 1; env 1 terminates at t = 0; env 2
+    terminates and hits the time limit at once at t = 1. The step after each is that env's
+    reset step (reward 0). Env e's obs at step t is 10 e + t: what step t led to is 10 e + t + 1
+    (at a done step, the real final obs)."""
+    T, N = 4, 3
+    obs = [np.array([[10.0 * e + t] for e in range(N)]) for t in range(T + 1)]
+    term = np.zeros((T, N), dtype=bool)
+    trunc = np.zeros((T, N), dtype=bool)
+    term[0, 1] = trunc[1, 0] = term[1, 2] = trunc[1, 2] = True
+    rewards = np.ones((T, N), dtype=np.float32)
+    rewards[2, 0] = rewards[1, 1] = rewards[2, 2] = 0.0  # the reset steps
+    actions = np.array([[(t + e) % 2 for e in range(N)] for t in range(T)])
+    valid = np.ones((T, N), dtype=bool)
+    valid[1:] = ~(term | trunc)[:-1]  # the step after a done step is a reset step
+    return obs, actions, rewards, term, trunc, valid
+
+
+def ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset, stored_trunc):
+    """The name of the mistake a differing field shows, or ''."""
+    done = term[t] | trunc[t]
+    if key == "terminated":
+        if np.array_equal(got, done):
+            return tr("terminated or truncated stored as terminated: GAE would not bootstrap "
+                      "from V(final obs) at a time-limit truncation (env 0 at t = 1), which is "
+                      "not terminal", "把 terminated or truncated 存成了 terminated：在时间截断处"
+                      "（t = 1 的环境 0）GAE 就不会用 V(最后的观测) 自举了，而时间截断不是终止")
+        if (term[t] & ~got & stored_trunc).any():
+            return tr("the termination stored as a time-limit truncation (the two flags swapped, "
+                      "or the end stored as truncated): GAE would bootstrap from V(final obs) "
+                      "after the pole fell, where the episode really ended",
+                      "把终止存成了时间截断（两个标志弄反了，或者把回合结束存成了 truncated）："
+                      "杆倒了、回合真正结束之后，GAE 还会用 V(最后的观测) 自举")
+        if (term[t] & ~got).any():
+            return tr("a termination not stored as one: GAE would bootstrap from V(final obs) "
+                      "after the episode really ended, and run its sum on into the next episode",
+                      "终止没有存成终止：回合真正结束之后，GAE 还会用 V(最后的观测) 自举，并且一直"
+                      "累加到下一个回合里")
+    if key == "truncated":
+        if np.array_equal(got, done):
+            return tr("terminated or truncated stored as truncated: keep each flag as the env "
+                      "gave it", "把 terminated or truncated 存成了 truncated：两个标志都按环境给的"
+                      "原样存")
+        if np.array_equal(got, np.zeros_like(got)) and trunc[t].any():
+            return tr("the time limit not stored (truncated dropped): GAE's sum would run on "
+                      "past it into the next episode", "没有存下时间截断（丢了 truncated）："
+                      "GAE 的累加会越过它，进入下一个回合")
+    if key == "valid":
+        if got.all() and not valid[t].all():
+            return tr("the autoreset step not masked: the reset step's ignored action and 0 "
+                      "reward would train pi (valid = ~autoreset)", "没有掩掉自动重置步：重置步"
+                      "被忽略的动作和 0 奖励会拿去训练 pi（valid = ~autoreset）")
+        if np.array_equal(got, autoreset):
+            return tr("valid = autoreset: the mask says where the reset steps are, valid where "
+                      "the rows train (valid = ~autoreset)", "valid = autoreset：掩码标的是重置步"
+                      "在哪里，valid 标的是哪些行拿去训练（valid = ~autoreset）")
+        if np.array_equal(got, ~done):
+            return tr("the step that ended the episode masked, not the reset step after it: "
+                      "valid = ~autoreset, the previous step's flags",
+                      "掩掉的是结束回合的那一步，不是它后面的重置步：valid = ~autoreset，用的是上"
+                      "一步的标志")
+    if key == "obs":
+        return tr("next_obs stored as obs: the action was chosen in obs (obs and next_obs "
+                  "mixed up)", "把 next_obs 存成了 obs：动作是在 obs 上选的（obs 和 next_obs "
+                  "弄混了）") if got.tolist() == [[10.0 * e + t + 1] for e in range(3)] else ""
+    if key == "returned obs":
+        return tr("obs not advanced (obs = next_obs left out): step t + 1 would act in s_t "
+                  "again", "观测没有前进（漏了 obs = next_obs）：第 t + 1 步还会在 s_t 上选动作") \
+            if got == [[10.0 * e + t] for e in range(3)] else ""
+    if key == "returned autoreset":
+        if got == as_list(autoreset):
+            return tr("the mask not updated: the returned autoreset is the one passed in",
+                      "掩码没有更新：返回的 autoreset 就是传进来的那个")
+        if got == as_list(term[t]):
+            return tr("the mask from terminated alone: a truncated env resets too (terminated "
+                      "| truncated)", "掩码只看了 terminated：时间截断的环境也会重置（terminated "
+                      "| truncated）")
+        if got == as_list(~done):
+            return tr("the mask the wrong way round: True where the next step is a reset step",
+                      "掩码反了：下一步是重置步的地方才是 True")
+        if got == as_list(autoreset | done):
+            return tr("the mask kept from the steps before (autoreset | ...): only this step's "
+                      "flags say where step t + 1 is a reset step",
+                      "把之前的掩码也留下来了（autoreset | ...）：第 t + 1 步是不是重置步，只看这一步"
+                      "的标志")
+    return ""
+
+
+def check_ppo_rollout(fn):
+    ppo = importlib.import_module("ppo_cartpole")
+    obs, actions, rewards, term, trunc, valid = ppo_rollout_case()
+    T, N = actions.shape
+    buffer = ppo.RolloutBuffer(T, N, 1)
+    current, autoreset = obs[0].copy(), np.zeros(N, dtype=bool)
+    case = tr("case: 3 envs, 4 steps, env e's obs at step t = 10 e + t; env 1 terminated at t = 0, "
+              "env 0 truncated (time limit) at t = 1, env 2 terminated and truncated at t = 1; "
+              "the step after each is its reset step",
+              "例子：3 个环境，4 步，环境 e 在第 t 步的观测是 10 e + t；t = 0 处环境 1 终止，t = 1 处"
+              "环境 0 时间截断，t = 1 处环境 2 同时终止和时间截断；它们各自的下一步是重置步")
+    for t in range(T):
+        out = fn(buffer, t, current, actions[t].copy(), rewards[t].copy(), obs[t + 1].copy(),
+                 term[t].copy(), trunc[t].copy(), autoreset.copy())
+        where = tr(f"\n  step t = {t}: ", f"\n  第 t = {t} 步：")
+        if not isinstance(out, tuple) or len(out) != 2:
+            raise Failed(case + where + tr(
+                f"expected (obs, autoreset), got {type(out).__name__}",
+                f"应该返回 (obs, autoreset)，得到的是 {type(out).__name__}"))
+        rows = dict(obs=(buffer.obs[t], obs[t].astype(np.float32)),
+                    actions=(buffer.actions[t], actions[t]),
+                    rewards=(buffer.rewards[t], rewards[t]),
+                    terminated=(buffer.terminated[t], term[t]),
+                    truncated=(buffer.truncated[t], trunc[t]),
+                    valid=(buffer.valid[t], valid[t]))
+        returned = {"returned obs": (as_list(out[0]), as_list(obs[t + 1])),
+                    "returned autoreset": (as_list(out[1]), as_list(term[t] | trunc[t]))}
+        for key, (got, want) in rows.items():
+            if not np.array_equal(got, want):
+                named = ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset,
+                                            buffer.truncated[t])
+                raise Failed(case + where + tr(f"the buffer's {key}[{t}]: expected "
+                                               f"{want.tolist()}, got {got.tolist()}",
+                                               f"缓冲区的 {key}[{t}]：应该是 {want.tolist()}，"
+                                               f"得到的是 {got.tolist()}")
+                             + (tr("\n  this is exactly what this mistake gives: ",
+                                   "\n  这正是这个错误会得到的值：") + named if named else ""))
+        for key, (got, want) in returned.items():
+            if got != want:
+                named = ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset,
+                                            buffer.truncated[t])
+                label = dict(obs=tr("the obs returned (where step t + 1 acts)",
+                                    "返回的 obs（第 t + 1 步在这里选动作）"),
+                             autoreset=tr("the autoreset mask returned (for step t + 1)",
+                                          "返回的 autoreset 掩码（给第 t + 1 步用）"))[key.split()[1]]
+                raise Failed(case + where + tr(f"{label}: expected {want}, got {got}",
+                                               f"{label}：应该是 {want}，得到的是 {got}")
+                             + (tr("\n  this is exactly what this mistake gives: ",
+                                   "\n  这正是这个错误会得到的值：") + named if named else ""))
+        current, autoreset = np.asarray(out[0]), np.asarray(out[1], dtype=bool)
 
 
 def compare(name, got, expected):
@@ -797,6 +1100,10 @@ def worked_cases(ex, fn):
         return check_a2c_targets(fn)
     if ex.function == "ddpg_update":
         return check_ddpg_update(fn)
+    if ex.name == "ddpg_store_step":
+        return check_ddpg_store(fn)
+    if ex.name == "ppo_rollout_step":
+        return check_ppo_rollout(fn)
     for what, args, expected in ex.cases():
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
         got = fn(*args)
@@ -1269,6 +1576,21 @@ EXERCISES = {ex.name: ex for ex in (
                         "\n  数据上（多个环境、自动重置步）开始不同的地方。"), outputs=("returns", "advantages")),
     exercise("ddpg_update", "ddpg_walker", "ddpg_update", "ddpg_walker", lambda: [], DDPG_LOOP,
              DDPG_LEARN, OFF_POLICY, outputs=("critic_loss", "actor_loss")),
+    exercise("ddpg_store_step", "ddpg_walker", "store_and_advance", "ddpg_walker", lambda: [],
+             DDPG_LOOP, DDPG_LEARN,
+             lambda: tr("Every minibatch is sampled from what your function stored, and every "
+                        "action is chosen in the obs\n  it returned: the first step that differs "
+                        "is where they first differ.",
+                        "每个小批量都是从你的函数存下的数据里抽的，每个动作都在它返回的观测上选："
+                        "\n  第一个不同的步就是它们开始不同的地方。")),
+    exercise("ppo_rollout_step", "ppo_cartpole", "store_and_advance", "ppo_cartpole", lambda: [],
+             dict(CARTPOLE_LOOP, total_timesteps=1280), CARTPOLE_LEARN,
+             lambda: tr("Every rollout is stored by your function, and every action is chosen in "
+                        "the obs it returned: the\n  first update that differs is where they "
+                        "differ on real steps (8 envs, autoreset steps).",
+                        "每批 rollout 都由你的函数存下，每个动作都在它返回的观测上选：第一次不同的"
+                        "更新，\n  就是它们在真实的步上（8 个环境、自动重置步）开始不同的地方。"),
+             outputs=("obs", "autoreset")),
 )}
 
 

@@ -13,6 +13,7 @@ sys.path.insert(0, str(ROOT / "exercises"))
 import check  # noqa: E402
 
 HEADER = """
+import numpy as np
 import torch
 import torch.nn.functional as F
 from torch.distributions import Categorical, kl_divergence
@@ -436,6 +437,111 @@ WRONG = {
                 soft_update(critic_target, critic, cfg.tau)
                 # the actor's target forgotten
                 return critic_loss.detach(), actor_loss.detach()""", "(a)", "the actor's target after the soft update"),
+        ("""def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+                from ddpg_walker import compute_loss_actor, soft_update, td_target
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+                critic_loss = F.mse_loss(critic(obs, action), y)
+                critic_loss.backward()
+                critic_opt.step()
+                critic_opt.zero_grad()  # zeroed after the step, not before the backward
+                actor_loss = compute_loss_actor(actor, critic, obs)
+                actor_loss.backward()  # no inputs=: the critic's .grad keeps this till its next step
+                actor_opt.step()
+                actor_opt.zero_grad()
+                soft_update(critic_target, critic, cfg.tau)
+                soft_update(actor_target, actor, cfg.tau)
+                return critic_loss.detach(), actor_loss.detach()""", "(a)",
+         "left the actor's gradient in the critic's .grad"),
+    ],
+    "ddpg_store_step": [
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, terminated or truncated)  # done
+                if terminated or truncated:
+                    next_obs, _ = env.reset()
+                return next_obs""", "(a)", "terminated or truncated stored as the episode's end"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, truncated)  # the wrong flag
+                if terminated or truncated:
+                    next_obs, _ = env.reset()
+                return next_obs""", "(a)", "the termination not stored"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(next_obs, action, reward, obs, terminated)  # s and s' swapped
+                if terminated or truncated:
+                    next_obs, _ = env.reset()
+                return next_obs""", "(a)", "obs and next_obs swapped"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, terminated)
+                if terminated or truncated:
+                    obs, _ = env.reset()
+                return obs  # not advanced when the episode goes on""", "(a)", "obs not advanced"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, terminated)
+                if terminated:  # a truncated episode goes on
+                    next_obs, _ = env.reset()
+                return next_obs""", "(a)", "no new episode after a time-limit truncation"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                if terminated or truncated:  # reset first
+                    next_obs, _ = env.reset()
+                buffer.add(obs, action, reward, next_obs, terminated)
+                return next_obs""", "(a)", "the new episode's first obs stored as s'"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, terminated)
+                if terminated or truncated:
+                    next_obs = env.reset()  # gym's old API
+                return next_obs""", "(a)", "env.reset() returns (obs, info)"),
+        ("""def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+                buffer.add(obs, action, reward, next_obs, not terminated)  # not_done passed in
+                if terminated or truncated:
+                    next_obs, _ = env.reset()
+                return next_obs""", "(a)", "the flag the other way round"),
+    ],
+    "ppo_rollout_step": [
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                done = terminated | truncated  # one done flag, as tutorial 000 has
+                buffer.store(t, obs, action, reward, done, truncated, valid=~autoreset)
+                return next_obs, done""", "(a)", "terminated or truncated stored as terminated"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, truncated, terminated, valid=~autoreset)
+                return next_obs, terminated | truncated""", "(a)", "the termination stored as a time-limit truncation"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, np.zeros_like(terminated), truncated,
+                             valid=~autoreset)  # terminated forgotten
+                return next_obs, terminated | truncated""", "(a)", "a termination not stored as one"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=np.ones_like(autoreset))
+                return next_obs, terminated | truncated""", "(a)", "the autoreset step not masked"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                done = terminated | truncated
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=~done)
+                return next_obs, done""", "(a)", "the step that ended the episode masked"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, next_obs, action, reward, terminated, truncated, valid=~autoreset)
+                return next_obs, terminated | truncated""", "(a)", "next_obs stored as obs"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset)
+                return next_obs, terminated  # only a fallen pole resets""", "(a)", "the mask from terminated alone"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset)
+                return obs, terminated | truncated""", "(a)", "obs not advanced"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=autoreset)
+                return next_obs, terminated | truncated""", "(a)", "valid = autoreset"),
+        ("""def store_and_advance(buffer, t, obs, action, reward, next_obs, terminated, truncated,
+                                  autoreset):
+                buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset)
+                return next_obs, autoreset | terminated | truncated  # the mask kept""", "(a)",
+         "the mask kept from the steps before"),
     ],
     "soft_update": [
         ("""def soft_update(target, source, tau):
@@ -557,6 +663,31 @@ def test_the_table_exits_0_only_when_every_exercise_passes(monkeypatch, capsys):
 
 def blank(*args):
     raise NotImplementedError("not written yet")
+
+
+NO_INPUTS = """def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_opt, batch, cfg):
+    from ddpg_walker import compute_loss_actor, soft_update, td_target
+    obs, action, reward, next_obs, not_done = batch
+    with torch.no_grad():
+        y = td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)), cfg.gamma)
+    critic_loss = F.mse_loss(critic(obs, action), y)
+    critic_opt.zero_grad()
+    critic_loss.backward()
+    critic_opt.step()
+    actor_loss = compute_loss_actor(actor, critic, obs)
+    actor_opt.zero_grad()
+    actor_loss.backward()  # no inputs=: the critic's .grad is filled too, and zeroed before its use
+    actor_opt.step()
+    soft_update(critic_target, critic, cfg.tau)
+    soft_update(actor_target, actor, cfg.tau)
+    return critic_loss.detach(), actor_loss.detach()"""
+
+
+def test_a_harmless_difference_passes_the_worked_cases():
+    """The actor's backward without inputs= fills the critic's .grad as well, and the critic's
+    next step zeroes it before its own backward: the same numbers, so (a) passes it (its twin
+    that zeroes the critic after the step fails: WRONG["ddpg_update"])."""
+    check.worked_cases(check.EXERCISES["ddpg_update"], compile_answer(NO_INPUTS, "ddpg_update"))
 
 
 def test_a_loop_that_no_longer_calls_the_function_fails_loudly():
