@@ -6,7 +6,7 @@ only weighs the step), the critic fits its targets R, and an entropy bonus keeps
     python exercises/check.py a2c_loss
 The reference answer: actor_critic_cartpole.a2c_loss (actor_critic_cartpole.py).
 
-中文：练习：A2C 的损失（Mnih 等 2016，算法 S3 和第 4 节，对照教程 004）。演员提高
+练习：A2C 的损失（Mnih 等 2016 的算法 S3 和第 4 节，对照教程 004）。演员提高
 log pi(a|s) * A（A 是常数），评论员拟合目标 R，熵正则项鼓励探索。参考答案：
 actor_critic_cartpole.a2c_loss。
 """
@@ -24,6 +24,10 @@ def a2c_loss(model, data, cfg):
         loss    = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
 
     stats: loss_pi, loss_v and entropy as numbers (.item()), as the script logs them.
+
+    在一批数据上返回 (loss, stats)：model(obs) 给出 (logits, V)；data["obs"]、["act"]、["adv"]
+    （优势 A_t，已经算好）和 ["ret"]（评论员的目标 R_t）。四行公式见上；stats 里的 loss_pi、loss_v
+    和 entropy 都是数（.item()），和脚本记的一样。
     """
     obs, act, adv, ret = data["obs"], data["act"], data["adv"], data["ret"]
     logits, values = model(obs)

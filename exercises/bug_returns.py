@@ -4,7 +4,7 @@ curve beside the original's: docs/exercises.md). Find the mistake, fix it here, 
 
     python exercises/check.py bug_returns
 
-中文：找错（A2C，CartPole）：这个函数能运行，但用它训练，平均回报大多在 150 以下，原版能解决
+找错（A2C，CartPole）。这个函数能运行，但用它训练，平均回报大多在 150 以下，原版能解决
 CartPole。找到错误，在这里改正，再用上面的命令确认。
 """
 
@@ -13,7 +13,11 @@ import torch
 
 def discounted_returns(rewards, next_values, terminated, truncated, gamma):
     """Reward-to-go G_t = r_t + gamma * G_{t+1} over a (T, N) rollout, bootstrapped with
-    next_values (V(s_{t+1})) where the rollout is cut."""
+    next_values (V(s_{t+1})) where the rollout is cut.
+
+    在一批 (T, N) 的数据上算折扣回报 G_t = r_t + gamma * G_{t+1}，在这批数据的末尾和时间截断处
+    用 next_values（V(s_{t+1})）自举。
+    """
     returns = torch.zeros_like(rewards)
     future = next_values[-1]  # bootstrap past the rollout's end
     for t in reversed(range(len(rewards))):

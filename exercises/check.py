@@ -14,7 +14,7 @@ Your function reaches the script as the experiments' variants do (experiments/la
 the script itself has no branch and no flag for it. Messages in Chinese or English: --lang,
 else the locale. Exit status 0 only when every stage run passed.
 
-中文：检查练习。三关：(a) 手算的例子（损失函数还比较梯度）；(b) 把你的函数换进脚本自己的 train()，
+检查练习，分三关：(a) 手算的例子（损失函数还比较梯度）；(b) 把你的函数换进脚本自己的 train()，
 和原版逐次更新比较日志；(c) 用你的函数把任务学会。--lang zh 显示中文（默认跟随系统的语言设置）。
 """
 
@@ -418,7 +418,7 @@ def check_a2c_targets(fn):
                 for label, value in a2c_targets_mistakes(rollout, values, t(7.0, 8.0)):
                     if got[0].shape == value.shape and torch.allclose(got[0].detach(), value):
                         named = tr("\n  this is exactly what this mistake gives: ",
-                                   "\n  这正是这个错误会得到的值：") + label
+                                   "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
             raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}{named}") from None
 
 
@@ -495,7 +495,7 @@ def check_ddpg_update(fn):
     except Failed as e:
         named = [label for label, value in mistakes if abs(float(got[0]) - float(value)) < 1e-5]
         raise Failed(case + str(e) + (tr("\n  this is exactly what this mistake gives: ",
-                                         "\n  这正是这个错误会得到的值：") + named[0]
+                                         "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0]
                                       if named else "")) from None
     steps = [("critic", tr("the critic after its step", "评论员更新之后")),
              ("actor", tr("the actor after its step", "演员更新之后")),
@@ -511,8 +511,8 @@ def check_ddpg_update(fn):
     if abs(got_actor - float(expected[1])) > 1e-5 and abs(got_actor - actor_first) < 1e-5:
         swapped_steps = tr("\n  this is exactly what this mistake gives: the actor's step taken "
                            "before the critic's (the actor must learn from the updated critic)",
-                           "\n  这正是这个错误会得到的值：演员在评论员之前更新了（演员要用更新过的"
-                           "评论员来学）")
+                           "\n  你的值恰好是这个常见错误会得到的值：\n"
+                           "    演员在评论员之前更新了（演员要用更新过的评论员来学）")
     for name, what in steps:
         for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
             if not torch.allclose(p, q, atol=1e-6):
@@ -586,8 +586,9 @@ def check_soft_update(fn):
         if got != [expected] * 3:
             swapped_tau = tr("\n  this is exactly what this mistake gives: tau and 1 - tau "
                              "swapped (the target jumps most of the way)",
-                             "\n  这正是这个错误会得到的值：tau 和 1 - tau 放反了（目标网络一下子移动了"
-                             "大部分距离）") if got == [0.9] * 3 else ""
+                             "\n  你的值恰好是这个常见错误会得到的值：\n"
+                             "    tau 和 1 - tau 放反了（目标网络一下子移动了大部分距离）"
+                             ) if got == [0.9] * 3 else ""
             raise Failed(tr(
                 f"case: theta' = 0, theta = 1, tau = 0.1, twice: 0.1, then 0.19\n  target's "
                 f"weights and bias after soft_update: expected {expected} each (theta' = tau * "
@@ -645,7 +646,8 @@ def td3_cases():
            t(2.5, 3.5, 1.0)),
           (tr("the mean of Q1' and Q2' where their min belongs", "取了 Q1' 和 Q2' 的平均，应该取较小的"),
            t(2.75, 2.75, 1.0)),
-          (tr("no not_done: a future after a termination", "没有乘 not_done：终止之后还加了未来"),
+          (tr("no not_done: a future after a termination",
+              "没有乘 not_done，终止之后还加上了未来的价值"),
            t(2.5, 2.0, 1.5)),
           (tr("the critics being trained, nets[\"critic\"] and nets[\"critic2\"], where the target "
               "critics Q1', Q2' belong (here they give 0, so y = r)",
@@ -689,8 +691,8 @@ def check_td3_target(fn):
                 named = [tr("the noise not clipped to [-c, c] (sigma is 10000 in this case)",
                             "噪声没有裁剪到 [-c, c]（这个例子里 sigma 是 10000）")]
             raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
-                "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
-                + named[0] if named else "")) from None
+                "\n  this is exactly what this mistake gives: ",
+                "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None
 
 
 # ---- the store-and-advance steps (loop exercises): the buffer's rows and what the loop gets back
@@ -1291,7 +1293,8 @@ def a2c_mistakes(model, data, cfg):
 
 
 def td_mistakes(reward, not_done, next_q, gamma):
-    return [(tr("no not_done: a future added after a termination", "没有乘 not_done：终止之后还加了未来"),
+    return [(tr("no not_done: a future added after a termination",
+                "没有乘 not_done，终止之后还加上了未来的价值"),
              reward + gamma * next_q),
             (tr("(1 - not_done): not_done is already 1 - terminated",
                 "写成了 (1 - not_done)：not_done 本身就是 1 - terminated"),
@@ -1332,7 +1335,8 @@ def named_mistake(ex, args, got):
         except (TypeError, RuntimeError):
             same = False
         if same:
-            return tr("\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：") + label
+            return tr("\n  this is exactly what this mistake gives: ",
+                      "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
     return ""
 
 
@@ -1658,18 +1662,44 @@ def check(name, fn=None, learning=True, say=print):
     return True
 
 
+def ChineseHelp(prog):
+    """The scripts' --help-zh layout (help_zh.py: Chinese wrapped by columns), no defaults."""
+    import help_zh
+
+    class Layout(help_zh.HelpFormatter):
+        def _get_help_string(self, action):
+            return action.help
+
+    return Layout(prog)
+
+
 def main(argv=None):
     global LANG
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("name", nargs="?", choices=sorted(EXERCISES), help="the exercise")
-    parser.add_argument("--no-learning", action="store_true", help="stop after stage (b)")
-    parser.add_argument("--lang", choices=("zh", "en"), default=None,
-                        help="the messages' language (default: from the locale, e.g. "
-                             "LANG=zh_CN.UTF-8 gives zh; else en)")
+    argv = sys.argv[1:] if argv is None else list(argv)  # --help in the messages' language too:
+    given = [b for a, b in zip(argv, argv[1:]) if a == "--lang"] + [
+        a.partition("=")[2] for a in argv if a.startswith("--lang=")]
+    LANG = given[-1] if given and given[-1] in ("zh", "en") else locale_lang()
+    chinese = next(p for p in __doc__.split("\n\n") if p.startswith("检查练习"))
+    parser = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0] + tr("", "\n\n" + chinese.replace("\n", "")),
+        formatter_class=tr(argparse.HelpFormatter, ChineseHelp))
+    parser.add_argument("name", nargs="?", choices=sorted(EXERCISES), help=tr(
+        "the exercise", "the exercise\n练习名；不写时，列出所有练习的第 (a)、(b) 关"))
+    parser.add_argument("--no-learning", action="store_true", help=tr(
+        "stop after stage (b)", "stop after stage (b)\n只跑第 (a)、(b) 两关，不跑第 (c) 关“学会任务”"))
+    en = "the messages' language (default: from the locale, e.g. LANG=zh_CN.UTF-8 gives zh; else en)"
+    parser.add_argument("--lang", choices=("zh", "en"), default=None, help=tr(en, en + (
+        "\n提示用的语言；不写时跟随系统的语言设置（例如 LANG=zh_CN.UTF-8 时是 zh），否则是 en")))
     args = parser.parse_args(argv)
     LANG = args.lang or locale_lang()
     if args.name:
-        sys.exit(0 if check(args.name, learning=not args.no_learning) else 1)
+        passed = check(args.name, learning=not args.no_learning)
+        if passed and args.no_learning:  # say so: all-pass lines alone read as if (c) passed too
+            print(line(args.name, stage_names()[2], tr("not run (--no-learning)",
+                                                       "没有跑（加了 --no-learning）"),
+                       tr(f"python exercises/check.py {args.name} runs it",
+                          f"要跑这一关，运行 python exercises/check.py {args.name}")))
+        sys.exit(0 if passed else 1)
     all_passed = True
     fail = tr("FAIL", "未通过")
     for name in EXERCISES:  # no name: (a) and (b) of every exercise, one line each

@@ -8,7 +8,7 @@ it is estimated by V. Where the episode really ended (terminated), it is 0.
     python exercises/check.py discounted_returns
 The reference answer: common.discounted_returns (common.py).
 
-中文：练习：在时间截断处自举的折扣回报（A2C 的 n 步目标）。对照教程 004：评论员的目标是回报 R_t，
+练习：在时间截断处自举的折扣回报（A2C 的 n 步目标）。对照教程 004：评论员的目标是回报 R_t，
 优势 A = R - V。从后往前算 R_t = r_t + gamma * R_{t+1}；rollout 的最后一步和时间截断
 （truncated）处用 V 估计未来，真正结束（terminated）处未来为 0。参考答案：common.discounted_returns。
 """
@@ -26,6 +26,11 @@ def discounted_returns(rewards, next_values, terminated, truncated, gamma):
 
     next_values[t] is V(s_{t+1}), the value of the obs step t led to. Returns a (T, N) tensor
     shaped like `rewards`; the inputs are left as they are.
+
+    折扣回报 G_t = r_t + gamma * G_{t+1}，每个输入的形状都是 (T, N)（N 个环境各 T 步）。第 t 步之后
+    的未来：terminated[t] 时为 0（终止优先）；truncated[t] 时，或者 t = T - 1（这批数据的末尾）时，
+    是 next_values[t]；其余情况是 G_{t+1}。next_values[t] 是 V(s_{t+1})，即第 t 步到达的观测的价值。
+    返回和 rewards 形状相同的 (T, N) 张量，不要改动输入。
     """
     # Your code here (你的代码写在这里): a loop from t = T - 1 down to 0.
     raise NotImplementedError("not written yet")

@@ -8,7 +8,7 @@ truncation still bootstraps in its TD error (the state was not terminal) but sto
     python exercises/check.py gae
 The reference answer: common.gae (common.py).
 
-中文：练习：GAE（广义优势估计，Schulman 等 2016，式 16），PPO 的优势。对照教程 000、002。
+练习：GAE（广义优势估计，Schulman 等 2016 的式 16），PPO 的优势。对照教程 000、002。
 每一步的 TD 误差按 gamma * lam 从后往前累加，回合结束处重新开始；时间截断（truncated）的那一步
 在 TD 误差里仍然自举（状态不是终止状态），但累加到此为止。参考答案：common.gae。
 """
@@ -24,6 +24,10 @@ def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
 
     values[t] is V(s_t), next_values[t] is V(s_{t+1}); A_T (after the last step) is 0.
     The inputs are left as they are.
+
+    优势 A_t，形状和 rewards 一样，是 (T, N)。公式见上：delta_t 里只有终止（terminated）才去掉
+    V(s_{t+1})；累加到回合结束（done，即终止或时间截断）处就停。values[t] 是 V(s_t)，next_values[t]
+    是 V(s_{t+1})；最后一步之后的 A_T 为 0。不要改动输入。
     """
     # Your code here (你的代码写在这里): a loop from t = T - 1 down to 0.
     raise NotImplementedError("not written yet")

@@ -9,7 +9,7 @@ are padding, masked out. The lines after the blank are the script's own.
     python exercises/check.py grpo_loss
 The reference answer: grpo_addition.grpo_loss (grpo_addition.py).
 
-中文：练习：GRPO 的损失：逐个 token 计算，用 k3 估计 KL，并用掩码去掉填充（Shao 等 2024，式 3、
+练习：GRPO 的损失，逐个 token 计算，用 k3 估计 KL，并用掩码去掉填充（Shao 等 2024，式 3、
 式 4）。每个 token 用 PPO 的裁剪比值，优势是它所在回答的 A_i；KL 惩罚把策略拉向冻结的监督模型
 pi_ref，每个 token 用 k3 估计；回答里第一个 "." 之后的 token 是填充，要用掩码去掉。空白后面的
 代码和脚本里的一样。参考答案：grpo_addition.grpo_loss。
@@ -32,6 +32,12 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
     length_i is completion i's number of tokens (mask.sum(1)) if cfg.length_norm, else L for
     every completion (Dr. GRPO). Name the per-token k3 `kl` and the ratio `ratio`: the lines
     after the blank log them.
+
+    对 B 个各有 L 个 token 的回答返回 (loss, info)：logp、logp_old、logp_ref 都是 (B, L)，是每个
+    采样出的 token 在 pi（正在训练）、pi_old（采样它的模型）和 pi_ref（冻结）下的对数概率；adv 是
+    (B,)；mask 是 (B, L)，回答自己的 token 处为 1。公式见上，D_t 就是 k3。cfg.length_norm 为真时，
+    length_i 是回答 i 的 token 数（mask.sum(1)），否则每个回答都用 L（Dr. GRPO）。逐 token 的 k3 要
+    命名为 kl，比值命名为 ratio，空白后面的代码要记录它们。
     """
     # Your code here (你的代码写在这里): ratio, the clipped surrogate, kl (k3), then loss.
     raise NotImplementedError("not written yet")

@@ -10,7 +10,8 @@ are the script's own.
     python exercises/check.py td3_target
 The reference answer: td3_walker.update_critics (td3_walker.py).
 
-中文：练习：TD3 评论员的目标：裁剪双 Q 学习加目标策略平滑（论文式 10、第 5.3 节、算法 1）。
+练习：TD3 评论员的目标，即裁剪双 Q 学习加目标策略平滑（Fujimoto 等 2018 的式 10、第 5.3 节
+和算法 1）。
 目标动作是目标演员的动作加上裁剪过的高斯噪声，a~ = mu'(s') + clip(eps, -c, c)，eps ~ N(0, sigma)，
 再限制在动作范围内；目标取两个目标评论员在 a~ 处较小的估计：
 y = r + gamma * (1 - terminated) * min(Q1'(s', a~), Q2'(s', a~))。空白后面的代码和脚本里的一样。
@@ -33,6 +34,13 @@ def update_critics(nets, batch, half_width, low, high, cfg):
         eps = clip(N(0, sigma), -c, c) * half_width        (torch.randn_like(action))
         a~  = clip(mu'(s') + eps, low, high)
         y   = r + gamma * not_done * min(Q1'(s', a~), Q2'(s', a~))
+
+    在一个小批量上让两个评论员朝裁剪双 Q 目标各走一步。nets 里有 "actor_target"、"critic_target"
+    （Q1'）、"critic2_target"（Q2'）、"critic"、"critic2" 和 "critic_opt"；评论员的调用方式是
+    critic(obs, action)，给出 (B,)。batch 里有 obs、action、reward (B,)、next_obs 和 not_done（(B,)，
+    即 1 - terminated）。half_width 是每个动作维度的 (high - low) / 2；low、high 是动作的范围。
+    cfg.target_noise 是 sigma，cfg.noise_clip 是 c，单位都是 half_width。公式见上；噪声用
+    torch.randn_like(action) 抽。
     """
     obs, action, reward, next_obs, not_done = batch
     with torch.no_grad():  # targets are constants: no gradient flows into them

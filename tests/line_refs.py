@@ -1,7 +1,8 @@
 """The guides' code references, `file.py:LINE` `name` (README.zh-CN.md, docs/ppo_to_grpo*.md),
 kept true by a program: each
 LINE is made the line of `name` in that file nearest to the LINE written, so an edit that
-moves a script's lines moves its references with it.
+moves a script's lines moves its references with it. A name written as a call, `name(`, is
+a call: never the line that defines it.
 
     python tests/line_refs.py          # rewrite the guides' line numbers; say which moved
     python tests/line_refs.py --check  # exit 1 if any is off (tests/test_readmes.py runs this)
@@ -56,7 +57,8 @@ def refreshed(text):
             prose = prose_lines(ROOT / file)
             word = re.compile((r"(?<!\w)" if name[0].isalnum() or name[0] == "_" else "")
                               + re.escape(name) + (r"(?!\w)" if name[-1].isalnum() else ""))
-            hits = [i + 1 for i, s in enumerate(source) if word.search(s) and i + 1 not in prose]
+            hits = [i + 1 for i, s in enumerate(source) if word.search(s) and i + 1 not in prose
+                    and not (name.endswith("(") and re.match(r"\s*(def|class) ", s))]  # a call
             hits = hits or [i + 1 for i, s in enumerate(source) if word.search(s)]  # a comment
             if not hits:
                 problems.append(f"{file} holds no {name!r} ({ref.group(0)})")

@@ -729,6 +729,28 @@ def test_messages_in_chinese(monkeypatch, capsys):
         assert ": " not in text and "FAIL" not in text and "pass" not in text, text
 
 
+@pytest.mark.quick
+def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monkeypatch, capsys):
+    """All passes under --no-learning end with a line that (c) did not run, and how to run it;
+    --help in Chinese has a Chinese line under each option, and a known mistake stands on a
+    line of its own after the sentence that introduces it."""
+    ex = check.EXERCISES["td_target"]
+    monkeypatch.setattr(check, "real_loop", lambda ex, fn: None)
+    monkeypatch.setattr(check, "load", lambda name: getattr(ex.owner(), ex.function))
+    for lang, words in (("zh", "第 (c) 关“学会任务”没有跑"), ("en", "(c) learning: not run")):
+        with pytest.raises(SystemExit) as exit:
+            check.main(["td_target", "--no-learning", "--lang", lang])
+        last = capsys.readouterr().out.splitlines()[-1]
+        assert exit.value.code == 0 and words in last and "check.py td_target" in last, last
+    with pytest.raises(SystemExit):
+        check.main(["--help", "--lang", "zh"])
+    out = capsys.readouterr().out
+    assert "只跑第 (a)、(b) 两关" in out and "检查练习，分三关" in out, out
+    monkeypatch.setattr(check, "LANG", "zh")
+    passed, lines = run("td_target", compile_answer(WRONG["td_target"][0][0], "td_target"))
+    assert "常见错误会得到的值：\n    没有乘 not_done，" in lines[-1], lines[-1]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target"])
 def test_the_scripts_own_functions_learn(name):

@@ -37,6 +37,7 @@ GLOSSARY = {
     "验证器": (),
     "检查程序": (),
     "题目": ("提示词",),
+    "统计口径": ("量法",),
 }
 GRPO_TEXTS = ("docs/ppo_to_grpo.zh-CN.md", "grpo_addition.py")  # verifier and prompt live here
 

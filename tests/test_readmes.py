@@ -116,6 +116,18 @@ def test_code_references_point_at_their_names(guide):
     assert len(line_refs.REF.findall(text)) >= 20
 
 
+def test_a_reference_to_a_call_is_not_moved_to_the_definition():
+    """`name(` names a call: a guide that gives a function and its call gets two lines."""
+    import line_refs
+
+    text = "定义 `ddpg_walker.py:190` `td_target`，调用 `ddpg_walker.py:190` `td_target(`"
+    _, moved, _ = line_refs.refreshed(text)
+    source = (ROOT / "ddpg_walker.py").read_text(encoding="utf-8").splitlines()
+    (define, _), (call, _) = [(int(new.split()[0].split(":")[1]), new) for _, new in moved]
+    assert source[define - 1].startswith("def td_target(")
+    assert "= td_target(" in source[call - 1], source[call - 1]
+
+
 def zh_prose():
     """README.zh-CN.md outside its code blocks, as one string."""
     return "\n".join(split_code(ZH)[1])
