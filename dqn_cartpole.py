@@ -105,7 +105,7 @@ class Config(cli.SolvedFlags):
     """minibatch steps in each learning phase (Mnih et al.: 1)"""
     target_update_interval: int = 64
     """gradient steps between copies of the network into the target (Mnih et al.: 10000; rl-zoo's
-    10 env steps amount to 128: once a phase). Each copy lets Q look one step further: two a
+    10 env steps amount to 128: once a phase). Each copy lets Q look about one step further: two a
     phase build Q twice as fast; every 32, Q diverged"""
     eps_start: float = 1.0
     """epsilon of epsilon-greedy at step 0"""
@@ -200,7 +200,8 @@ def next_q(q_net, q_target, next_obs, double):
 def td_target(reward, not_done, next_value, gamma):
     """y = r + gamma * next_value, with no future after a termination (not_done = 0).
     DQN:        next_value = max_a Q'(s', a)                    (van Hasselt et al. 2016, eq. 3)
-    Double DQN: next_value = Q'(s', argmax_a Q(s', a))          (van Hasselt et al. 2016, eq. 4)
+    Double DQN: next_value = Q'(s', argmax_a Q(s', a))   (van Hasselt et al. 2016: eq. 4, its
+                second weights theta' being the target network's, section "Double DQN")
     The max both picks and values the action with the same noisy estimates, so it is biased
     upward: E[max_a Q] >= max_a E[Q]. Two actions worth the same, each estimated with
     independent noise of std 1: the max is 1/sqrt(pi) = 0.56 too high on average, and each
@@ -321,7 +322,7 @@ def train(cfg: Config):
             phases += 1
             loss, q, next_max, next_double = torch.stack(stats).mean(0).tolist()
             q_greedy = mc_return = None  # measured every q_check_every phases:
-            if phases % cfg.q_check_every == 0:  # Q against the return, as in ddpg_walker.py
+            if phases % cfg.q_check_every == 0:  # Q against the return (van Hasselt et al., fig. 3)
                 seen = []  # the greedy policy's episodes: their states and rewards
                 # 2 episodes of up to 1000 steps, longer than the limit's 500, so that a policy
                 # that never falls still leaves 500 states far enough from its end
