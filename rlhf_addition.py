@@ -68,8 +68,7 @@ def with_scalar_head(model, d_model):
 
 @dataclass
 class Config(cli.OutputFlags):
-    """The task's and the algorithm's settings; the flags every script shares (--run-dir,
-    --eval, --threads, ...) come from cli.OutputFlags."""
+    """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
     UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard")  # not here
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
@@ -408,10 +407,11 @@ def train(cfg: Config):
                                                         sequence_score(rm, rejected[idx], P)),
                      len(chosen), cfg.rm_epochs, cfg.rm_lr, cfg.rm_batch, gen, logged)
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
-            result["rm_accuracy"] = (sequence_score(rm, test_w, P) > sequence_score(rm, test_l, P)
-                                     ).float().mean().item()
+            r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
+            result["rm_accuracy"] = (r_w > r_l).float().mean().item()
             # shift r so that the supervised model's answers score 0 on average (InstructGPT)
-            rm.head.bias -= sequence_score(rm, seqs, P).mean()
+            shift = sequence_score(rm, seqs, P).mean()
+            rm.head.bias -= shift
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
         print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
               f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs (took "
@@ -461,14 +461,14 @@ def train(cfg: Config):
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
     elif cfg.curves:
         with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            draw(run.dir, rm, test_w, test_l, P)
+            draw(run.dir, r_w - shift, r_l - shift)
     return dict(result, interrupted=run.interrupted)
 
 
-def draw(run_dir, rm, test_w, test_l, P):
+def draw(run_dir, r_w, r_l):
     """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
-    of the held-out pairs' chosen and rejected answers, and the over-optimisation picture:
-    learned reward and true score of PPO's samples against the KL to the supervised model."""
+    r_w, r_l of the held-out pairs' chosen and rejected answers, and the over-optimisation
+    picture: learned reward and true score of PPO's samples against their KL to pi_ref."""
     log = np.genfromtxt(run_dir / "progress.csv", delimiter=",", names=True, dtype=None,
                         encoding="utf-8")  # a record array: phase is text, the rest numbers
     plt, phase, ppo = plots.pyplot(), log["phase"], log["phase"] == "ppo"
@@ -483,9 +483,8 @@ def draw(run_dir, rm, test_w, test_l, P):
         ax.legend(fontsize=7)
     print(f"curve: {plots.save_whole(plt, fig, run_dir / 'curve.png', dpi=80)}", flush=True)
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
-    with torch.no_grad():
-        for seqs, label in ((test_w, "chosen (higher true score)"), (test_l, "rejected")):
-            left.hist(sequence_score(rm, seqs, P).numpy(), bins=40, alpha=0.6, label=label)
+    for scores, label in ((r_w, "chosen (higher true score)"), (r_l, "rejected")):
+        left.hist(scores.numpy(), bins=40, alpha=0.6, label=label)
     left.set(title="reward model on held-out pairs", xlabel="r(x, y)")
     for key in ("rm_score", "true_score"):
         right.plot(np.sqrt(np.maximum(log["kl"][ppo], 0)), log[key][ppo], ".-", ms=3, label=key)
