@@ -203,13 +203,13 @@ def test_the_pages_numbers_are_the_records():
                                                   ROOT / "benchmarks" / "rlhf_seeds.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
-    cells, seeds = bench.summary()
     rlhf_rows = {r["seed"]: r for r in csv.DictReader(open(bench.OUT)) if r["run"] == "default"}
     grpo_rows = {r["seed"]: r for r in csv.DictReader(open(bench.GRPO))}
     assert set(grpo_rows) == set(rlhf_rows), "GRPO beside: not the RLHF runs' seeds"
     for seed, r in grpo_rows.items():
         for k in ("supervised_true", "supervised_accuracy"):
             assert r[k] == rlhf_rows[seed][k], (seed, k, "not the same supervised model")
+    cells, seeds = bench.summary()
     for page in ("ppo_to_rlhf.md", "ppo_to_rlhf.zh-CN.md"):
         text = (ROOT / "docs" / page).read_text(encoding="utf-8")
         rows = [line for line in text.splitlines() if line.startswith("| ") and " [" in line]
