@@ -149,7 +149,8 @@ class Config(cli.OutputFlags):
 
     def __post_init__(self):
         cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
-                  "--cuda, --tensorboard: no env, no GPU code, no TensorBoard logs here")
+                  "--cuda, --tensorboard are not for this script: no env to play, no GPU code, no "
+                  "TensorBoard logs (--eval prints the saved models' answers)")
         super().__post_init__()
         cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", label_noise="[0, 1]",
