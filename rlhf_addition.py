@@ -31,20 +31,19 @@ The run, top to bottom:
 """
 
 import copy
-import csv
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
-import torch.nn as nn
 import torch.nn.functional as F
 
 import checkpoints
 import cli
 import common
 import plots
+import report
 import runlog
 from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
                            sample, sft_loss, split_pairs, token_logp)
@@ -60,7 +59,7 @@ def with_scalar_head(model, d_model):
     logits: the reward model r(x, y) and the value network V(s) (InstructGPT: both start
     from a trained transformer, with a new head). (B, T) ids -> (B, T, 1)."""
     scalar = copy.deepcopy(model)
-    scalar.head = nn.Linear(d_model, 1)
+    scalar.head = torch.nn.Linear(d_model, 1)
     return scalar
 
 
@@ -69,9 +68,8 @@ def with_scalar_head(model, d_model):
 
 @dataclass
 class Config(cli.OutputFlags):
-    """The task's and the algorithm's settings; the flags every script shares (--run-dir,
-    --eval, --threads, ...) come from cli.OutputFlags."""
-    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif")  # no env to play: not in --help
+    """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
+    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard")  # not here
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 2
@@ -150,6 +148,9 @@ class Config(cli.OutputFlags):
     """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
 
     def __post_init__(self):
+        cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
+                  "--cuda, --tensorboard are not for this script: no env to play, no GPU code, no "
+                  "TensorBoard logs (--eval prints the saved models' answers)")
         super().__post_init__()
         cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", label_noise="[0, 1]",
@@ -165,8 +166,6 @@ class Config(cli.OutputFlags):
                   f"({self.num_minibatches}) exceeds --ppo-prompts ({self.ppo_prompts})")
         cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
                   f"multiple of --n-head ({self.n_head})")
-        cli.check(not (self.gif or self.watch), "--gif and --watch play an env, and this task "
-                  "has none: --eval prints the saved models' answers")
 
 
 # ==== The task's labels, the judge and its preference pairs ===============================
@@ -185,6 +184,11 @@ def true_score(a, b, completion, digits):
     after its first ".") has in place; 1.0 for the right sum. The policy never sees it."""
     right, answer = label_of(a, b, digits), completion.split(".")[0] + "."
     return sum(x == y for x, y in zip(answer, right)) / len(right)
+
+
+def prompt_ids(pairs, digits):
+    """The prompts of (a, b) pairs ("47+38="), as token ids, (B, P)."""
+    return torch.tensor([encode(prompt_of(a, b, digits)) for a, b in pairs])
 
 
 def scores_of(seqs, digits):
@@ -297,10 +301,8 @@ def evaluate(model, pairs, cfg, n=None):
     """Held-out true score (the judge's mean) and accuracy (the share of right answers), over
     eval_samples answers to each prompt drawn from pi at temperature 1, with a generator of
     their own (training's draws are not shifted)."""
-    P, pairs = 2 * cfg.digits + 2, pairs[:n]
-    prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in pairs])
-    gen = torch.Generator().manual_seed(cfg.eval_seed)
-    seqs = sample(model, prompts.repeat_interleave(cfg.eval_samples, 0), cfg.digits + 2, gen)
+    prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.eval_samples, 0)
+    seqs = sample(model, prompts, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed))
     scores = scores_of(seqs, cfg.digits)
     return scores.mean().item(), (scores == 1).float().mean().item()
 
@@ -336,19 +338,19 @@ def ppo_update(policy, value_net, opt, data, cfg, gen):
 
 
 def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
-    """A progress.csv row (the other columns not measured: None) and, with a model to `check`, its held-out
-    true score and accuracy on 100 prompts, shown on a progress line."""
+    """A progress.csv row, None where not measured; with a model to `check`, its held-out true
+    score and accuracy on 100 prompts, on a progress line."""
     run.global_step += 1
     held = evaluate(check, held_out, cfg, 100) if check is not None else (None, None)
-    run.update(dict(UNMEASURED, **numbers, held_true=held[0], held_accuracy=held[1]),
-               show=show or check is not None, phase=phase)
+    run.update(dict(dict.fromkeys(LOGGED), phase=phase, **numbers, held_true=held[0],
+                    held_accuracy=held[1]), show=show or check is not None)
 
 
 def stage_done(result, name, model, held_out, cfg, start):
     """After a stage: held-out true score and accuracy on all the held-out prompts, one line."""
-    result["held"][name] = evaluate(model, held_out, cfg)
-    print(f"{name}: held-out true score {result['held'][name][0]:.3f}, accuracy "
-          f"{result['held'][name][1]:.3f} (took {time.time() - start:.0f} s)", flush=True)
+    score, accuracy = result["held"][name] = evaluate(model, held_out, cfg)
+    print(f"{name}: held-out true score {score:.3f}, accuracy {accuracy:.3f} (took "
+          f"{time.time() - start:.0f} s)", flush=True)
 
 
 # What each step logs, once: progress.csv's columns, (progress-line format or None, label)
@@ -357,7 +359,6 @@ LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "
               kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
               clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
               held_accuracy=(".3f", "held-out accuracy"))
-UNMEASURED = dict.fromkeys([c for c in LOGGED if c != "phase"])  # None: not measured here
 SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
              eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
 
@@ -373,8 +374,7 @@ def train(cfg: Config):
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
     train_pairs, held_out = split_pairs(cfg.digits, cfg.eval_prompts, rng)
     P, L, K = 2 * cfg.digits + 2, cfg.digits + 2, cfg.answers_per_prompt  # prompt, answer lengths
-    prompts_of = lambda picks: torch.tensor([encode(prompt_of(*train_pairs[i], cfg.digits))  # noqa
-                                             for i in picks])
+    prompts_of = lambda picks: prompt_ids([train_pairs[i] for i in picks], cfg.digits)  # noqa
     policy = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     result, nets = dict(run_dir=run.dir, held={}, rm_accuracy=None), dict(policy=policy)
@@ -398,8 +398,7 @@ def train(cfg: Config):
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
         chosen, rejected, _ = preference_pairs(seqs, scores_of(seqs, cfg.digits), K, cfg.flip, rng)
-        test_prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in held_out])
-        test = sample(reference, test_prompts.repeat_interleave(K, 0), L, gen)  # true order
+        test = sample(reference, prompt_ids(held_out, cfg.digits).repeat_interleave(K, 0), L, gen)
         test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
 
         # --- 3. the reward model: r(x, y_w) above r(x, y_l), Bradley-Terry ---
@@ -409,10 +408,11 @@ def train(cfg: Config):
                                                         sequence_score(rm, rejected[idx], P)),
                      len(chosen), cfg.rm_epochs, cfg.rm_lr, cfg.rm_batch, gen, logged)
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
-            result["rm_accuracy"] = (sequence_score(rm, test_w, P) > sequence_score(rm, test_l, P)
-                                     ).float().mean().item()
+            r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
+            result["rm_accuracy"] = (r_w > r_l).float().mean().item()
             # shift r so that the supervised model's answers score 0 on average (InstructGPT)
-            rm.head.bias -= sequence_score(rm, seqs, P).mean()
+            shift = sequence_score(rm, seqs, P).mean()
+            rm.head.bias -= shift
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
         print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
               f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs (took "
@@ -440,9 +440,8 @@ def train(cfg: Config):
             data = dict(seqs=seqs, logp=logp_old, adv=adv, ret=ret, mask=mask, P=P)
             loss_pi, loss_v, clipfrac = ppo_update(policy, value_net, opt, data, cfg, gen)
             log_row(run, held_out, cfg, "ppo", check=None if step % cfg.eval_every else policy,
-                    loss=loss_pi.item(), rm_score=learned.mean().item(),
-                    true_score=truth.mean().item(), kl=kl.sum(1).mean().item(),
-                    loss_v=loss_v.item(), clipfrac=clipfrac.item())
+                    loss=loss_pi.item(), rm_score=learned.mean().item(), kl=kl.sum(1).mean().item(),
+                    true_score=truth.mean().item(), loss_v=loss_v.item(), clipfrac=clipfrac.item())
         stage_done(result, "PPO", policy, held_out, cfg, start)
 
         # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
@@ -459,23 +458,21 @@ def train(cfg: Config):
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
                 cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
-    if not run.interrupted and cfg.curves:
+    if run.interrupted:
+        print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
+    elif cfg.curves:
         with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            draw(run.dir, rm, test_w, test_l, P)
+            draw(run.dir, r_w - shift, r_l - shift)
     return dict(result, interrupted=run.interrupted)
 
 
-# ==== Pictures, --eval ====================================================================
-
-
-def draw(run_dir, rm, test_w, test_l, P):
+def draw(run_dir, r_w, r_l):
     """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
-    of the held-out pairs' chosen and rejected answers, and the over-optimisation picture:
-    learned reward and true score of PPO's samples against the KL to the supervised model."""
-    with open(run_dir / "progress.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    phase = np.array([r.pop("phase") for r in rows])  # the other columns are numbers
-    plt, log = plots.pyplot(), {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+    r_w, r_l of the held-out pairs' chosen and rejected answers, and the over-optimisation
+    picture: learned reward and true score of PPO's samples against their KL to pi_ref."""
+    log = np.genfromtxt(run_dir / "progress.csv", delimiter=",", names=True, dtype=None,
+                        encoding="utf-8")  # a record array: phase is text, the rest numbers
+    plt, phase, ppo = plots.pyplot(), log["phase"], log["phase"] == "ppo"
     fig, axes = plt.subplots(1, 4, figsize=(15, 3.5))
     for ax, name in zip(axes, ("sft", "rm", "ppo", "dpo")):
         for key in ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy"):
@@ -485,20 +482,17 @@ def draw(run_dir, rm, test_w, test_l, P):
                         marker="o" if key.startswith("held") else None)
         ax.set(title=name, xlabel="step")
         ax.legend(fontsize=7)
-    plots.save_whole(plt, fig, run_dir / "curve.png", dpi=80)
+    print(f"curve: {plots.save_whole(plt, fig, run_dir / 'curve.png', dpi=80)}", flush=True)
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
-    with torch.no_grad():
-        for seqs, label in ((test_w, "chosen (higher true score)"), (test_l, "rejected")):
-            left.hist(sequence_score(rm, seqs, P).numpy(), bins=40, alpha=0.6, label=label)
+    for scores, label in ((r_w, "chosen (higher true score)"), (r_l, "rejected")):
+        left.hist(scores.numpy(), bins=40, alpha=0.6, label=label)
     left.set(title="reward model on held-out pairs", xlabel="r(x, y)")
     for key in ("rm_score", "true_score"):
-        right.plot(np.sqrt(np.maximum(log["kl"][phase == "ppo"], 0)), log[key][phase == "ppo"],
-                   ".-", ms=3, label=key)
+        right.plot(np.sqrt(np.maximum(log["kl"][ppo], 0)), log[key][ppo], ".-", ms=3, label=key)
     right.set(title="PPO's answers against their KL to the supervised model",
               xlabel="sqrt(KL(pi || pi_ref)), per answer")
     left.legend(fontsize=7), right.legend(fontsize=7)
-    plots.save_whole(plt, fig, run_dir / "inside.png", dpi=80)
-    print(f"curve: {run_dir / 'curve.png'}\ninside: {run_dir / 'inside.png'}", flush=True)
+    print(f"inside: {plots.save_whole(plt, fig, run_dir / 'inside.png', dpi=80)}", flush=True)
 
 
 def main(argv=None):
@@ -506,25 +500,20 @@ def main(argv=None):
     cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
     with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         if not cfg.eval:
-            result = train(cfg)
-            if result["interrupted"]:
-                print(f"interrupted: {result['run_dir']} holds model.pt as training left it",
-                      flush=True)
-                raise SystemExit(130)
-            return
+            return report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
         c = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
         P, gen = 2 * c.digits + 2, torch.Generator().manual_seed(c.eval_seed)
-        prompts = torch.tensor([encode(prompt_of(a, b, c.digits)) for a, b in held_out[:6]])
         for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
                 c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
-            seqs = sample(model, prompts.repeat_interleave(6, 0), c.digits + 2, gen)
-            scores = scores_of(seqs, c.digits).view(6, 6)
+            seqs = sample(model, prompt_ids(held_out[:6], c.digits).repeat_interleave(6, 0),
+                          c.digits + 2, gen)  # 6 answers to each of 6 held-out sums
+            scores = scores_of(seqs, c.digits).view(6, 6).tolist()
             for row, score in zip(seqs.view(6, 6, -1).tolist(), scores):
                 print(f"{key:6} {decode(row[0][:P])} " + " ".join(
-                    f"{decode(s[P:])}({v:.2f})" for s, v in zip(row, score.tolist())))
+                    f"{decode(s[P:])}({v:.2f})" for s, v in zip(row, score)))
             score, accuracy = evaluate(model, held_out, c)
             print(f"{key}: held-out ({len(held_out)} prompts) true score {score:.3f}, "
                   f"accuracy {accuracy:.3f}  ((n): the judge's hidden score)", flush=True)

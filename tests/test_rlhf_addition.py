@@ -169,7 +169,8 @@ def test_same_seed_same_log(tmp_path):
 @pytest.mark.parametrize("args,needle", [
     (["--reward-from", "people"], "--reward-from must be model or judge"),
     (["--flip", "2"], "--flip must be in [0, 1]"),
-    (["--answers-per-prompt", "1"], "--answers-per-prompt must be > 1")])
+    (["--answers-per-prompt", "1"], "--answers-per-prompt must be > 1"),
+    (["--cuda"], "no GPU code"), (["--tensorboard"], "no TensorBoard logs")])
 def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
     p = run_script("rlhf_addition.py", *args, "--run-dir", tmp_path, timeout=60)
     assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
@@ -190,8 +191,10 @@ def test_ctrl_c_keeps_the_model(tmp_path):
 
 def test_the_pages_numbers_are_the_records():
     """docs/ppo_to_rlhf.md and its Chinese page show the medians and ranges that
-    benchmarks/rlhf_seeds.py computes from benchmarks/results/rlhf_seeds.csv, row by row, the
-    seeds they cover, and the over-optimisation numbers of rlhf_overopt.csv."""
+    benchmarks/rlhf_seeds.py computes from benchmarks/results/rlhf_seeds.csv and, for GRPO
+    beside it, rlhf_grpo.csv, row by row, the seeds they cover, and the over-optimisation
+    numbers of rlhf_overopt.csv. GRPO's record covers the same seeds, each from the same
+    supervised model: its held-out figures before GRPO are the RLHF run's after supervision."""
     import importlib.util
 
     from conftest import ROOT
@@ -200,6 +203,12 @@ def test_the_pages_numbers_are_the_records():
                                                   ROOT / "benchmarks" / "rlhf_seeds.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
+    rlhf_rows = {r["seed"]: r for r in csv.DictReader(open(bench.OUT)) if r["run"] == "default"}
+    grpo_rows = {r["seed"]: r for r in csv.DictReader(open(bench.GRPO))}
+    assert set(grpo_rows) == set(rlhf_rows), "GRPO beside: not the RLHF runs' seeds"
+    for seed, r in grpo_rows.items():
+        for k in ("supervised_true", "supervised_accuracy"):
+            assert r[k] == rlhf_rows[seed][k], (seed, k, "not the same supervised model")
     cells, seeds = bench.summary()
     for page in ("ppo_to_rlhf.md", "ppo_to_rlhf.zh-CN.md"):
         text = (ROOT / "docs" / page).read_text(encoding="utf-8")
