@@ -86,9 +86,8 @@ class Critic(nn.Module):
 
 @dataclass
 class Config(cli.CheckpointFlags):
-    """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
-    --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and --checkpoint-every and
-    --resume come from cli.CheckpointFlags."""
+    """The algorithm's settings; the flags every script shares (--run-dir, --eval, --threads,
+    --cuda, ...), --checkpoint-every and --resume come from cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env (Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5)"""
@@ -139,11 +138,8 @@ class Config(cli.CheckpointFlags):
 
 
 class ReplayBuffer:
-    """A ring of the last `max_size` transitions, a tensor per field, on the training device.
-
-    Kept as tensors where training runs, a minibatch is one index into each
-    field: no numpy -> torch conversion per batch, no copy to the GPU.
-    """
+    """A ring of the last `max_size` transitions, a tensor per field, on the training device:
+    a minibatch is one index into each field (no numpy -> torch per batch, no copy to a GPU)."""
 
     def __init__(self, obs_dim, act_dim, max_size, device):
         self.obs = torch.zeros(max_size, obs_dim, device=device)       # s   (max_size, obs_dim)
@@ -189,13 +185,10 @@ class ReplayBuffer:
 
 
 def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
-    """Store the transition (s, a, r, s', terminated) and return the obs the next action is
-    chosen in: s', or a new episode's first obs once this one has ended.
-
-    One env, reset by hand: no autoreset step. E.g. a time limit at s' = [0.3]: the buffer
-    gets ([0.1], a, r, [0.3], not_done = 1), and the next action starts from env.reset()."""
-    # terminated, not (terminated or truncated): a time-limit truncation is not terminal,
-    # so its target still bootstraps from Q'(s', mu'(s')) (see ReplayBuffer.add)
+    """Store (s, a, r, s', terminated) and return the obs the next action is chosen in: s', or
+    a new episode's first obs once this one has ended (one env, reset by hand: no autoreset)."""
+    # terminated, not (terminated or truncated): a time-limit truncation is not terminal, so
+    # its target still bootstraps from s' (see ReplayBuffer.add)
     buffer.add(obs, action, reward, next_obs, terminated)
     if terminated or truncated:  # the episode is over either way: the next one starts afresh
         next_obs, _ = env.reset()

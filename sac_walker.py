@@ -32,8 +32,7 @@ curve.png, inside.png, and checkpoint.pt, from which --resume continues the run 
 目标评论员中较小的 Q 减去 α log π(a′|s′)，a′ 从当前策略采样；没有目标演员。三、演员的目标是
 让 min(Q1, Q2) 加上 α 倍的熵最大，每一步都更新，不延迟。四、温度系数 α 自动调节，让熵保持在
 目标熵 −dim(A) 附近（--alpha 0.2 则把 α 固定下来）。探索靠策略自身的随机性，不另加噪声。建议
-先读 DDPG 和 TD3（教程 003，以及 README.zh-CN.md 的路线三和其后的 TD3 一节），再用 diff 对照
-这几处修改。
+先读 DDPG 和 TD3（教程 003，README.zh-CN.md 的路线三和 TD3 一节），再用 diff 对照这几处修改。
 """
 
 import copy
@@ -124,9 +123,8 @@ class Critic(nn.Module):
 
 @dataclass
 class Config(cli.CheckpointFlags):
-    """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
-    --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and --checkpoint-every and
-    --resume come from cli.CheckpointFlags."""
+    """The algorithm's settings; the flags every script shares (--run-dir, --eval, --threads,
+    --cuda, ...), --checkpoint-every and --resume come from cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env (Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5)"""
@@ -183,11 +181,8 @@ class Config(cli.CheckpointFlags):
 
 
 class ReplayBuffer:
-    """A ring of the last `max_size` transitions, a tensor per field, on the training device.
-
-    Kept as tensors where training runs, a minibatch is one index into each
-    field: no numpy -> torch conversion per batch, no copy to the GPU.
-    """
+    """A ring of the last `max_size` transitions, a tensor per field, on the training device:
+    a minibatch is one index into each field (no numpy -> torch per batch, no copy to a GPU)."""
 
     def __init__(self, obs_dim, act_dim, max_size, device):
         self.obs = torch.zeros(max_size, obs_dim, device=device)       # s   (max_size, obs_dim)
@@ -217,8 +212,7 @@ class ReplayBuffer:
                                                      if torch.is_tensor(x)})
 
     def load_state_dict(self, state):
-        """--resume. A run extended by --total-timesteps may get a larger buffer: it fills on
-        after the saved rows."""
+        """--resume. A run extended by --total-timesteps may get a larger buffer: it fills on."""
         for key, x in vars(self).items():
             if torch.is_tensor(x):
                 x[:state["size"]] = state[key].to(x.device)
@@ -231,6 +225,17 @@ class ReplayBuffer:
         idx = torch.randint(0, self.size, (batch_size,), device=self.obs.device)
         return (self.obs[idx], self.action[idx], self.reward[idx], self.next_obs[idx],
                 self.not_done[idx])
+
+
+def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+    """Store (s, a, r, s', terminated) and return the obs the next action is chosen in: s', or
+    a new episode's first obs once this one has ended (one env, reset by hand: no autoreset)."""
+    # terminated, not (terminated or truncated): a time-limit truncation is not terminal, so
+    # its target still bootstraps from s' (see ReplayBuffer.add)
+    buffer.add(obs, action, reward, next_obs, terminated)
+    if terminated or truncated:  # the episode is over either way: the next one starts afresh
+        next_obs, _ = env.reset()
+    return next_obs  # obs = next_obs: the transition is stored; the next action starts here
 
 
 @torch.no_grad()
@@ -343,7 +348,6 @@ LOGGED = dict(q_estimate=(None, "critic: Q1(s, tanh(mean))"), q_states=(None, "s
               alpha=(None, "alpha, the entropy's weight"))
 PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="each evaluation")],
                         [plots.lines("entropy", "target_entropy"), plots.lines("alpha", log=True)]])
-SHIPPED = Path(__file__).resolve().parent / "docs" / f"{SCRIPT}2d.pt"  # none shipped yet
 SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,  # the tests':
              eval_every=150, eval_episodes=1, batch_size=64, hidden=64)  # seconds, every file
 
@@ -372,8 +376,7 @@ def train(cfg: Config):
     # H_target: -dim(A) unless set (Haarnoja et al. 2018b, table 1)
     target_entropy = -act_dim if cfg.target_entropy is None else cfg.target_entropy
     obs, _ = env.reset(seed=cfg.seed)
-    run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every,
-                               shipped=SHIPPED if cfg.env_id == "Walker2d-v5" else None)
+    run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every)
     actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
     # checkpoint.pt: each one's state_dict(), all that decides what comes next (--resume: exact)
     in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
@@ -397,12 +400,11 @@ def train(cfg: Config):
                     action = a.cpu().numpy()  # inside the box by the squash: no clip
             next_obs, reward, terminated, truncated, info = env.step(action)
 
-            # --- store: with terminated, not truncated (see ReplayBuffer.add) ---
-            buffer.add(obs, action, reward, next_obs, terminated)
-            obs = next_obs  # the transition is stored; the next action starts from here
+            # --- store (s, a, r, s', terminated), then move on to s' (or a new episode's s) ---
+            obs = store_and_advance(env, buffer, obs, action, reward, next_obs, terminated,
+                                    truncated)
             if terminated or truncated:
                 run.episode_ended(global_step, info["episode"]["r"])  # its return, episodes.csv
-                obs, _ = env.reset()
 
             # --- learn: one gradient step of the critics, the actor and alpha per env step
             # (Haarnoja et al. 2018b, Algorithm 1 and table 1) ---

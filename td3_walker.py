@@ -91,9 +91,8 @@ class Critic(nn.Module):
 
 @dataclass
 class Config(cli.CheckpointFlags):
-    """The algorithm's settings. The flags every script shares (--run-dir, --gifs, --curves,
-    --eval, --watch, --gif, --eval-episodes, --threads, --cuda, ...) and --checkpoint-every and
-    --resume come from cli.CheckpointFlags."""
+    """The algorithm's settings; the flags every script shares (--run-dir, --eval, --threads,
+    --cuda, ...), --checkpoint-every and --resume come from cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env (Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5)"""
@@ -126,11 +125,9 @@ class Config(cli.CheckpointFlags):
     random warm-up only once, as the untrained baseline (tutorial 003: 5000)"""
     # --- TD3's three fixes (Fujimoto et al. 2018, the paper's defaults) ---
     policy_delay: int = 2
-    """fix 2: the actor and the targets are updated once per this many critic updates
-    (1 = every step, as DDPG)"""
+    """fix 2: the actor and the targets move once per this many critic updates (1: as DDPG)"""
     target_noise: float = 0.2
-    """fix 3: std of the Gaussian noise on the target action mu'(s'), as a fraction of the
-    action range's half-width (0 = none, as DDPG)"""
+    """fix 3: std of the noise on the target action mu'(s'), in action half-widths (0: as DDPG)"""
     noise_clip: float = 0.5
     """fix 3: that noise is clipped to +- this (same units)"""
 
@@ -154,11 +151,8 @@ class Config(cli.CheckpointFlags):
 
 
 class ReplayBuffer:
-    """A ring of the last `max_size` transitions, a tensor per field, on the training device.
-
-    Kept as tensors where training runs, a minibatch is one index into each
-    field: no numpy -> torch conversion per batch, no copy to the GPU.
-    """
+    """A ring of the last `max_size` transitions, a tensor per field, on the training device:
+    a minibatch is one index into each field (no numpy -> torch per batch, no copy to a GPU)."""
 
     def __init__(self, obs_dim, act_dim, max_size, device):
         self.obs = torch.zeros(max_size, obs_dim, device=device)       # s   (max_size, obs_dim)
@@ -201,6 +195,17 @@ class ReplayBuffer:
         idx = torch.randint(0, self.size, (batch_size,), device=self.obs.device)
         return (self.obs[idx], self.action[idx], self.reward[idx], self.next_obs[idx],
                 self.not_done[idx])
+
+
+def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
+    """Store (s, a, r, s', terminated) and return the obs the next action is chosen in: s', or
+    a new episode's first obs once this one has ended (one env, reset by hand: no autoreset)."""
+    # terminated, not (terminated or truncated): a time-limit truncation is not terminal, so
+    # its target still bootstraps from s' (see ReplayBuffer.add)
+    buffer.add(obs, action, reward, next_obs, terminated)
+    if terminated or truncated:  # the episode is over either way: the next one starts afresh
+        next_obs, _ = env.reset()
+    return next_obs  # obs = next_obs: the transition is stored; the next action starts here
 
 
 @torch.no_grad()
@@ -247,8 +252,7 @@ def update_critics(nets, batch, half_width, low, high, cfg):
 
 
 def update_actor_and_targets(nets, obs, cfg):
-    """One actor step on Q1, then every target moves a fraction tau toward its network: fix 2
-    delays the targets with the actor."""
+    """One actor step on Q1, then every target moves a fraction tau (fix 2: with the actor)."""
     actor_loss = compute_loss_actor(nets["actor"], nets["critic"], obs)
     nets["actor_opt"].zero_grad()
     # inputs=: gradients for the actor only; the critic's would be thrown away.
@@ -338,12 +342,11 @@ def train(cfg: Config):
                     action = torch.clamp(a, low_t, high_t).cpu().numpy()
             next_obs, reward, terminated, truncated, info = env.step(action)
 
-            # --- store: with terminated, not truncated (see ReplayBuffer.add) ---
-            buffer.add(obs, action, reward, next_obs, terminated)
-            obs = next_obs  # the transition is stored; the next action starts from here
+            # --- store (s, a, r, s', terminated), then move on to s' (or a new episode's s) ---
+            obs = store_and_advance(env, buffer, obs, action, reward, next_obs, terminated,
+                                    truncated)
             if terminated or truncated:
                 run.episode_ended(global_step, info["episode"]["r"])  # its return, episodes.csv
-                obs, _ = env.reset()
 
             # --- learn: both critics every env step; fix 2, the actor and the targets only
             # every policy_delay steps (Fujimoto et al. 2018, Algorithm 1: "if t mod d") ---
