@@ -16,7 +16,7 @@ there is skipped, so the benchmark resumes where it stopped.
 
     pip install -r benchmarks/requirements.txt     # adds stable-baselines3
     python benchmarks/bench_dqn.py                 # seeds 0-4
-    python benchmarks/bench_dqn.py --summary       # the medians and ranges of the CSV
+    python benchmarks/bench_dqn.py --table         # the table of the CSV (docs/results.md's)
 """
 
 import argparse
@@ -35,7 +35,8 @@ PY = sys.executable
 OUT = ROOT / "benchmarks" / "results" / "dqn_sb3_cartpole.csv"
 RUNNERS = {  # the command of one seed; ours skips the GIFs and pictures (after its solved line)
     "dqn_cartpole": lambda seed, out: [PY, str(ROOT / "dqn_cartpole.py"), "--seed", str(seed),
-                                       "--run-dir", out, "--no-gifs", "--no-curves", "--threads", "1"],
+                                       "--run-dir", out, "--no-gifs", "--no-curves",
+                                       "--threads", "1"],
     "sb3_dqn": lambda seed, out: [PY, str(ROOT / "benchmarks" / "sb3_cartpole.py"), "--algo", "dqn",
                                   "--seed", str(seed), "--threads", "1"],
 }
@@ -89,40 +90,57 @@ def read_rows():
         return list(csv.DictReader(f))
 
 
-def summary(rows):
-    """Per runner: solved count, median and range of steps and seconds to solve and to stop;
-    then the ratio of the medians, ours / SB3."""
+def median_and_range(values, spec):
+    return (f"median {statistics.median(values):{spec}} [{min(values):{spec}}, "
+            f"{max(values):{spec}}]")
+
+
+def table(rows):
+    """The page's lines: a row per seed (steps and seconds to solve for each runner, "-" where
+    unsolved, and the greedy policy's mean at the end), then per runner the solved count with
+    the median [min, max] of steps and seconds, then the ratio of the medians, ours / SB3."""
+    by = {(r["runner"], r["seed"]): r for r in rows}
+    seeds = sorted({int(r["seed"]) for r in rows})
+    lines = ["| seed | ours: steps to solve | ours: seconds | SB3: steps to solve | SB3: seconds "
+             "| SB3: greedy at its end |", "|---|---|---|---|---|---|"]
+    for seed in seeds:
+        cells = []
+        for name in RUNNERS:
+            r = by.get((name, str(seed)), {})
+            cells += ([f"{int(r['solved_step']):,}", r["solved_seconds"]]
+                      if r.get("solved_step") else ["-", "-"])
+        greedy = by.get(("sb3_dqn", str(seed)), {}).get("greedy_eval_mean") or "-"
+        lines.append(f"| {seed} | " + " | ".join(cells) + f" | {greedy} |")
     medians = {}
     for name in RUNNERS:
         runs = [r for r in rows if r["runner"] == name]
-        print(f"{name}: {len(runs)} runs")
-        for what in ("solved", "stopped"):
-            done = [r for r in runs if r[f"{what}_step"]]
-            steps = [int(r[f"{what}_step"]) for r in done]
-            secs = [float(r[f"{what}_seconds"]) for r in done]
-            print(f"  {what}: {len(done)}/{len(runs)}", end="")
-            if done:
-                medians[name, what] = statistics.median(steps), statistics.median(secs)
-                print(f"; steps median {medians[name, what][0]:,.0f} ({min(steps):,} .. "
-                      f"{max(steps):,}); seconds median {medians[name, what][1]:.1f} "
-                      f"({min(secs):.1f} .. {max(secs):.1f})", end="")
-            print()
-    for what in ("solved", "stopped"):
-        ours, peer = medians.get(("dqn_cartpole", what)), medians.get(("sb3_dqn", what))
-        if ours and peer:
-            print(f"ratio ours / SB3 ({what}): steps {ours[0] / peer[0]:.2f}, "
-                  f"seconds {ours[1] / peer[1]:.2f}")
-        else:
-            print(f"ratio ours / SB3 ({what}): n/a (a side has no {what} run)")
+        done = [r for r in runs if r["solved_step"]]
+        whole = [float(r["total_seconds"]) for r in runs]
+        line = (f"{name}: solved {len(done)} of {len(runs)} (the whole process: seconds "
+                f"{median_and_range(whole, '.1f')})")
+        if done:
+            steps = [int(r["solved_step"]) for r in done]
+            secs = [float(r["solved_seconds"]) for r in done]
+            medians[name] = statistics.median(steps), statistics.median(secs)
+            line += (f"; steps {median_and_range(steps, ',.0f')}; seconds "
+                     f"{median_and_range(secs, '.1f')}")
+        lines.append(line + ".")
+    if len(medians) == 2:
+        (os_, oS), (ps, pS) = medians["dqn_cartpole"], medians["sb3_dqn"]
+        lines.append(f"The ratio of the medians, ours / SB3: steps {os_ / ps:.2f}, seconds "
+                     f"{oS / pS:.2f}.")
+    else:
+        lines.append("The ratio of the medians, ours / SB3: none (a side solved no seed).")
+    return lines
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, default=5, help="seeds 0 .. N-1")
     parser.add_argument("--timeout", type=float, default=900, help="seconds before a run is killed")
-    parser.add_argument("--summary", action="store_true", help="only summarize the CSV")
+    parser.add_argument("--table", action="store_true", help="only the table of the CSV")
     args = parser.parse_args()
-    if not args.summary:
+    if not args.table:
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, cwd=ROOT).stdout.strip()
         done = {(r["seed"], r["runner"]) for r in read_rows()}
@@ -142,10 +160,11 @@ def main():
                     if new:
                         writer.writeheader()
                     writer.writerow(row)
-                print(f"seed {seed}  {name:<13} " + ", ".join(
-                    f"{k} {row.get(k)}" for k in ("solved_step", "solved_seconds", "stopped_step",
-                                                  "stopped_seconds", "greedy_eval_mean")), flush=True)
-    summary(read_rows())
+                shown = ("solved_step", "solved_seconds", "stopped_step", "stopped_seconds",
+                         "greedy_eval_mean")
+                print(f"seed {seed}  {name:<13} " + ", ".join(f"{k} {row.get(k)}" for k in shown),
+                      flush=True)
+    print("\n".join(table(read_rows())))
 
 
 if __name__ == "__main__":
