@@ -963,6 +963,338 @@ def check_ppo_rollout(fn):
         current, autoreset = np.asarray(out[0]), np.asarray(out[1], dtype=bool)
 
 
+def dqn_case(double):
+    """Q and Q' as tables, a state's index in obs[:, 0]: the minibatch's states 0-2, their next
+    states 3-5. Q(s, a) = 1.5 for the taken actions and every y within 1 of it, so the Huber
+    gradient is linear and gives y back: dL/dQ(s, a) = (Q(s, a) - y) / B. The third transition
+    terminated."""
+    class Table(torch.nn.Module):
+        def __init__(self, rows):
+            super().__init__()
+            self.table = torch.nn.Parameter(torch.tensor(rows, dtype=torch.float32))
+
+        def forward(self, obs):
+            return self.table[obs[:, 0].long()]
+
+    class NoStep:
+        def zero_grad(self):
+            pass
+
+        def step(self):
+            pass
+
+    #                    s: 0-2 (actions 0, 1, 0)     s': 3-5
+    q_net = Table([[1.5, 0.0], [0.0, 1.5], [1.5, 0.0], [0.25, 0.5], [1.25, 0.25], [0.0, 0.25]])
+    q_target = Table([[0.0, 0.0]] * 3 + [[0.75, 0.0], [0.5, 1.0], [0.25, 0.75]])
+    obs, next_obs = t([0.0, 0.0], [1.0, 0.0], [2.0, 0.0]), t([3.0, 0.0], [4.0, 0.0], [5.0, 0.0])
+    batch = (obs, torch.tensor([0, 1, 0]), t(1.0, 1.0, 1.0), next_obs, t(1.0, 1.0, 0.0))
+    cfg = SimpleNamespace(gamma=0.5, double=double, max_grad_norm=0.0)
+    return q_net, q_target, NoStep(), batch, cfg
+
+
+def dqn_seen_y(q_net):
+    """y as the Huber gradient on Q(s, a) shows it (dqn_case), or None without a gradient."""
+    grad = q_net.table.grad
+    if grad is None:
+        return None
+    return 1.5 - 3 * grad[torch.arange(3), torch.tensor([0, 1, 0])]
+
+
+def dqn_mistakes(double):
+    """(label, y) of the known mistakes, for dqn_case: Q'(s') rows (0.75, 0), (0.5, 1),
+    (0.25, 0.75); Q(s') rows (0.25, 0.5), (1.25, 0.25), (0, 0.25); r = 1, gamma = 0.5."""
+    def y(v, not_done=t(1.0, 1.0, 0.0), gamma=0.5):
+        return 1.0 + gamma * not_done * t(*v)
+    max_t, double_v = (0.75, 1.0, 0.75), (0.0, 0.5, 0.75)
+    right = double_v if double else max_t
+    found = [
+        (tr("max_a Q(s', a) of the network being trained, where the target network Q' belongs",
+            "用了正在训练的当前网络的 max_a Q(s', a)，应该用目标网络 Q'"), y((0.5, 1.25, 0.25))),
+        (tr("the action picked by the target network and valued by the network, Q(s', argmax Q'): "
+            "Double DQN the other way round", "目标网络选动作、当前网络估值 Q(s', argmax Q')：Double DQN "
+            "反过来了"), y((0.25, 0.25, 0.0))),
+        (tr("no not_done: a future after a termination", "没有乘 not_done：终止之后还加了未来"),
+         y(right, not_done=t(1.0, 1.0, 1.0))),
+        (tr("(1 - not_done): not_done is already 1 - terminated",
+            "写成了 (1 - not_done)：not_done 本身就是 1 - terminated"),
+         y(right, not_done=t(0.0, 0.0, 1.0))),
+        (tr("gamma left out", "漏了 gamma"), y(right, gamma=1.0)),
+        (tr("a (B, 1) next-state value (keepdim or gather without squeeze(-1)): y broadcasts "
+            "to (B, B) against Q(s, a)", "下一状态的价值是 (B, 1)（keepdim，或 gather 之后没有 "
+            "squeeze(-1)）：y 和 Q(s, a) 广播成了 (B, B)"), y((sum(right) / 3,) * 3))]
+    if double:
+        found.append((tr("max_a Q'(s', a), DQN's target, where --double asks for Double DQN's "
+                         "Q'(s', argmax_a Q(s', a))", "用了 DQN 的 max_a Q'(s', a)，--double 要的是 "
+                         "Double DQN 的 Q'(s', argmax_a Q(s', a))"), y(max_t)))
+    else:
+        found.append((tr("Double DQN's Q'(s', argmax_a Q(s', a)) where cfg.double is False (DQN: "
+                         "max_a Q'(s', a))", "cfg.double 是 False，却用了 Double DQN 的 "
+                         "Q'(s', argmax_a Q(s', a))（DQN 要 max_a Q'(s', a)）"), y(double_v)))
+    return y(right), found
+
+
+def check_dqn_target(fn):
+    logged = []
+    for double in (False, True):  # y in each case first: a wrong y is named by its mistake
+        what = tr("Double DQN (cfg.double = True)", "Double DQN（cfg.double = True）") if double \
+            else tr("DQN (cfg.double = False)", "DQN（cfg.double = False）")
+        what += tr(": r = 1, gamma = 0.5, the third terminated; Q'(s') = (0.75, 0), (0.5, 1), "
+                   "(0.25, 0.75); Q(s') = (0.25, 0.5), (1.25, 0.25), (0, 0.25)",
+                   "：r = 1，gamma = 0.5，第三个终止；Q'(s') = (0.75, 0)、(0.5, 1)、(0.25, 0.75)；"
+                   "Q(s') = (0.25, 0.5)、(1.25, 0.25)、(0, 0.25)")
+        q_net, q_target, optimizer, batch, cfg = dqn_case(double)
+        logged.append((what, fn(q_net, q_target, optimizer, batch, cfg)))
+        expected, mistakes = dqn_mistakes(double)
+        got = dqn_seen_y(q_net)
+        try:
+            if got is None:
+                raise Failed(tr("no gradient reached Q(s, a): the lines after the blank must stay "
+                                "as they are", "梯度没有传到 Q(s, a)：空白后面的代码要保持原样"))
+            compare("y", got, expected)
+            if q_target.table.grad is not None and q_target.table.grad.abs().max() > 0:
+                raise Failed(tr("a gradient reached the target network Q': the target is a "
+                                "constant (torch.no_grad())", "梯度传进了目标网络 Q'：目标是常数"
+                                "（torch.no_grad()）"))
+            if q_net.table.grad[3:].abs().max() > 0:
+                raise Failed(tr("a gradient reached Q at the next states: the target is a "
+                                "constant (torch.no_grad())", "梯度传进了下一个状态的 Q：目标是常数"
+                                "（torch.no_grad()）"))
+        except Failed as e:
+            named = [label for label, value in mistakes
+                     if got is not None and torch.allclose(got, value, atol=1e-5)]
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
+                "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
+                + named[0] if named else "")) from None
+    for what, stats in logged:  # then what is logged of both next-state values
+        try:
+            compare(tr("the logged mean of next_max (max_a Q'(s', a))",
+                       "记录的 next_max（max_a Q'(s', a)）的均值"), stats[2], scalar(2.5 / 3))
+            compare(tr("the logged mean of next_double (Q'(s', argmax_a Q(s', a)))",
+                       "记录的 next_double（Q'(s', argmax_a Q(s', a))）的均值"), stats[3],
+                    scalar(1.25 / 3))
+        except Failed as e:
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}") from None
+
+
+class FixedNoise(torch.distributions.Normal):
+    """A Normal whose draws use a given eps: u = mean + sigma * eps (rsample); sample() is the
+    same number without the gradient, as torch's."""
+
+    def __init__(self, loc, scale, eps):
+        super().__init__(loc, scale)
+        self.eps = eps
+
+    def rsample(self, sample_shape=torch.Size()):
+        return self.loc + self.scale * self.eps
+
+    def sample(self, sample_shape=torch.Size()):
+        return self.rsample().detach()
+
+
+class SacActor(torch.nn.Module):
+    """The actor of a worked case: the mean and log sigma as parameters (B, act_dim), a fixed
+    eps, and sac_walker.Actor's scale, bias and sample() (the reference answer calls it; the
+    exercise asks you to write what it does)."""
+
+    def __init__(self, mean, log_std, eps, scale, bias):
+        super().__init__()
+        self.mean = torch.nn.Parameter(mean.clone())
+        self.log_std = torch.nn.Parameter(log_std.clone())
+        self.eps = eps
+        self.register_buffer("scale", scale)
+        self.register_buffer("bias", bias)
+
+    def distribution(self, obs):
+        return FixedNoise(self.mean, self.log_std.exp(), self.eps)
+
+    def sample(self, obs):
+        return importlib.import_module("sac_walker").Actor.sample(self, obs)
+
+
+def sac_case(mean, log_std, eps, low, high):
+    """obs (B, 2); Q1(s, a) = s_0 + sum(a), Q2(s, a) = s_1 + 2 sum(a): the smaller one differs
+    from row to row; alpha = 0.5."""
+    mean, log_std, eps = t(*mean), t(*log_std), t(*eps)
+    low, high = t(*low), t(*high)
+    obs = t([0.0, 1.0], [1.0, -0.5])
+    return (mean, log_std, eps, (high - low) / 2, (high + low) / 2, obs, scalar(0.5))
+
+
+def sac_by_hand(mean, log_std, eps, scale, bias, obs, alpha):
+    """The loss and log pi in float64, by the change of variables written out directly
+    (1 - tanh(u)^2 does not round to 0 in float64 for |u| < ~18)."""
+    m, s, e, sc, b, o = (x.double() for x in (mean, log_std.exp(), eps, scale, bias, obs))
+    u = m + s * e
+    log_n = -0.5 * ((u - m) / s) ** 2 - torch.log(s) - 0.5 * math.log(2 * math.pi)
+    logp = (log_n - torch.log(sc * (1 - torch.tanh(u) ** 2))).sum(-1)
+    a = b + sc * torch.tanh(u)
+    q = torch.min(o[:, 0] + a.sum(-1), o[:, 1] + 2 * a.sum(-1))
+    return (alpha.double() * logp - q).mean().float(), logp.float()
+
+
+def sac_critics():
+    return (lambda obs, a: obs[:, 0] + a.sum(-1)), (lambda obs, a: obs[:, 1] + 2 * a.sum(-1))
+
+
+def sac_variant(actor, obs, alpha, correction="exact", q_at="a", logp_of="u", reduce="sum",
+                critics="min", entropy=1.0, draw="rsample", detach_logp=False, detach_a=False):
+    """The loss and log pi as a known mistake computes them, in float32 (so that log(0) shows)."""
+    critic, critic2 = sac_critics()
+    u_dist = actor.distribution(obs)
+    u = u_dist.rsample() if draw == "rsample" else u_dist.sample()
+    a = actor.bias + actor.scale * torch.tanh(u)
+    log_slope = {"exact": torch.log(actor.scale) + 2 * (math.log(2) - u - F.softplus(-2 * u)),
+                 "none": torch.zeros_like(u),
+                 "flipped": -(torch.log(actor.scale) + 2 * (math.log(2) - u - F.softplus(-2 * u))),
+                 "direct": torch.log(actor.scale * (1 - torch.tanh(u) ** 2)),
+                 "epsilon": torch.log(actor.scale * (1 - torch.tanh(u) ** 2 + 1e-6)),
+                 "no_scale": 2 * (math.log(2) - u - F.softplus(-2 * u))}[correction]
+    per_dim = u_dist.log_prob(u if logp_of == "u" else a) - log_slope
+    logp = per_dim.sum(-1) if reduce == "sum" else per_dim.mean(-1)
+    at = {"a": a, "u": u, "tanh": torch.tanh(u)}[q_at]
+    at = at.detach() if detach_a else at
+    pick = torch.min if critics == "min" else torch.max
+    q = pick(critic(obs, at), critic2(obs, at))
+    return (entropy * alpha * (logp.detach() if detach_logp else logp) - q).mean(), logp
+
+
+def sac_value_mistakes():
+    return [
+        (tr("no tanh correction: log pi is the Gaussian's log density of u alone",
+            "没有 tanh 的修正：log pi 只用了 u 的高斯对数密度"), dict(correction="none")),
+        (tr("the correction's sign flipped: + log(scale * (1 - tanh(u)^2)), where the change of "
+            "variables subtracts it", "修正项的符号反了：变量替换要减去 log(scale * (1 - tanh(u)^2))，"
+            "不是加上"), dict(correction="flipped")),
+        (tr("log(1 - tanh(u)^2) computed directly: in float32 it is log(0) = -inf once |u| > ~9; "
+            "use 2 * (log 2 - u - softplus(-2u))", "直接算了 log(1 - tanh(u)^2)：float32 里 |u| > 9 "
+            "左右时它是 log(0) = -inf；用 2 * (log 2 - u - softplus(-2u))"), dict(correction="direct")),
+        (tr("log(1 - tanh(u)^2 + 1e-6), as some implementations write it: the epsilon keeps it "
+            "finite and moves the value,\n  a little here, and far in the tail it is no longer "
+            "the density (at u = 12: log 1e-6 = -13.8, the exact value -22.6);\n  the script "
+            "writes 2 * (log 2 - u - softplus(-2u)), exact everywhere",
+            "log(1 - tanh(u)^2 + 1e-6)，有些实现这样写：加上 epsilon 不会变成无穷，但数值变了，"
+            "\n  这里变得少，尾部就完全不是真正的密度了（u = 12 时 log 1e-6 = -13.8，准确值是 -22.6）；"
+            "\n  脚本写的是处处准确的 2 * (log 2 - u - softplus(-2u))"),
+         dict(correction="epsilon")),
+        (tr("the action box's scale left out of the correction: a = bias + scale * tanh(u), so "
+            "da/du = scale * (1 - tanh(u)^2)", "修正项漏了动作范围的 scale：a = bias + scale * tanh(u)，"
+            "所以 da/du = scale * (1 - tanh(u)^2)"), dict(correction="no_scale")),
+        (tr("the critics valued at the pre-squash sample u, not at the action a = bias + scale * "
+            "tanh(u)", "评论员在压缩前的样本 u 处取值，应该在动作 a = bias + scale * tanh(u) 处"),
+         dict(q_at="u")),
+        (tr("the critics valued at tanh(u), without the action box's scale and bias",
+            "评论员在 tanh(u) 处取值，漏了动作范围的 scale 和 bias"), dict(q_at="tanh")),
+        (tr("the Gaussian's log density taken at the squashed action a, not at u",
+            "高斯的对数密度在压缩后的动作 a 处取值，应该在 u 处"), dict(logp_of="a")),
+        (tr("log pi averaged over the action's dimensions, not summed (the density of a vector is "
+            "the product of its dimensions')", "log pi 对动作的各维求了平均，应该求和（向量的密度是"
+            "各维密度的乘积）"), dict(reduce="mean")),
+        (tr("max(Q1, Q2) where SAC takes the smaller", "取了 max(Q1, Q2)，SAC 取较小的"),
+         dict(critics="max")),
+        (tr("the entropy term's sign: the loss is alpha * log pi - Q (a lower log pi, more "
+            "entropy, lowers it)", "熵那一项的符号反了：损失是 alpha * log pi - Q（log pi 越小、熵越大，损失越小）"),
+         dict(entropy=-1.0))]
+
+
+def sac_gradient_mistakes():
+    return [
+        (tr("u drawn with sample(), not rsample(): no gradient passes through the sample "
+            "(the reparameterisation lost)", "u 用 sample() 抽取，不是 rsample()：梯度穿不过采样"
+            "（丢了重参数化）"), dict(draw="sample")),
+        (tr("log pi detached in the loss: the entropy term no longer trains the actor",
+            "损失里的 log pi 被 detach 了：熵那一项不再训练演员"), dict(detach_logp=True)),
+        (tr("the action detached before the critics: Q's gradient no longer reaches the actor",
+            "动作在送进评论员之前被 detach 了：Q 的梯度传不到演员"), dict(detach_a=True))]
+
+
+def sac_cases():
+    return [
+        (tr("scale 1, two action dimensions: u = mean + sigma * eps = (0.5, -1) and (1, 2)",
+            "scale 1，两维动作：u = mean + sigma * eps = (0.5, -1) 和 (1, 2)"),
+         sac_case([[0.5, -1.0], [0.0, 1.0]], [[0.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [1.0, 1.0]],
+                  [-1.0, -1.0], [1.0, 1.0])),
+        (tr("the action box [-1, 3] x [-2, 2]: scale (2, 2), bias (1, 0); u as above",
+            "动作范围 [-1, 3] x [-2, 2]：scale (2, 2)，bias (1, 0)；u 同上"),
+         sac_case([[0.5, -1.0], [0.0, 1.0]], [[0.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [1.0, 1.0]],
+                  [-1.0, -2.0], [3.0, 2.0])),
+        (tr("far in the tail: u = (12, 0) and (1, 2) (tanh(12) rounds to 1 in float32)",
+            "尾部很远：u = (12, 0) 和 (1, 2)（float32 里 tanh(12) 舍入成 1）"),
+         sac_case([[12.0, 0.0], [0.0, 1.0]], [[0.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [1.0, 1.0]],
+                  [-1.0, -1.0], [1.0, 1.0])),
+    ]
+
+
+def sac_named(got, actor, obs, alpha):
+    """The label of the known mistake whose loss and log pi `got` gives (an infinite loss
+    matches an infinite one), or ''."""
+    def close(a, b):
+        return (torch.is_tensor(a) and a.shape == b.shape
+                and torch.allclose(a.detach(), b.detach(), atol=1e-6, rtol=1e-6))
+    for label, mistake in sac_value_mistakes():
+        loss, logp = sac_variant(actor(), obs, alpha, **mistake)
+        if not torch.isfinite(loss) and torch.is_tensor(got[0]) and not torch.isfinite(
+                got[0]).all() or close(got[0], loss) and close(got[1], logp):
+            return label
+    return ""
+
+
+def check_sac_actor_loss(fn):
+    own = importlib.import_module("sac_walker").compute_loss_actor
+    critic, critic2 = sac_critics()
+    for what, (mean, log_std, eps, scale, bias, obs, alpha) in sac_cases():
+        def actor(case=(mean, log_std, eps, scale, bias)):
+            return SacActor(*case)
+        yours = actor()
+        out = fn(yours, critic, critic2, obs, alpha)
+        loss, logp = sac_by_hand(mean, log_std, eps, scale, bias, obs, alpha)
+        inputs = tr(f"\n  input: mean={rounded(mean)}, sigma={rounded(log_std.exp())}, "
+                    f"eps={rounded(eps)}, scale={rounded(scale)}, bias={rounded(bias)}, alpha=0.5;"
+                    f" Q1 = s_0 + sum(a), Q2 = s_1 + 2 sum(a), s = {rounded(obs)}",
+                    f"\n  输入：mean={rounded(mean)}，sigma={rounded(log_std.exp())}，"
+                    f"eps={rounded(eps)}，scale={rounded(scale)}，bias={rounded(bias)}，alpha=0.5；"
+                    f"Q1 = s_0 + sum(a)，Q2 = s_1 + 2 sum(a)，s = {rounded(obs)}")
+        named = ""
+        try:
+            if not isinstance(out, tuple) or len(out) != 2:
+                raise Failed(tr(f"expected (loss, logp), got {type(out).__name__}",
+                                f"应该返回 (loss, logp)，得到的是 {type(out).__name__}"))
+            try:
+                compare("loss", out[0], loss)
+                compare("logp", out[1], logp)
+            except Failed:
+                named = sac_named(out, actor, obs, alpha)
+                raise
+            reference = actor()
+            own(reference, critic, critic2, obs, alpha)[0].backward()
+            if not out[0].requires_grad:
+                raise Failed(tr("gradient cut: the loss is right and carries no gradient at all "
+                                "(computed under torch.no_grad(), or from .item() or .detach())",
+                                "梯度被切断：损失数值对，但完全不带梯度（在 torch.no_grad() 下算的，"
+                                "或经过了 .item()、.detach()）"))
+            out[0].backward()
+            for name in ("mean", "log_std"):
+                r, g = getattr(reference, name).grad, getattr(yours, name).grad
+                g = torch.zeros_like(r) if g is None else g
+                if torch.allclose(g, r, atol=1e-5, rtol=1e-4):
+                    continue
+                for label, mistake in sac_gradient_mistakes():
+                    variant = actor()
+                    sac_variant(variant, obs, alpha, **mistake)[0].backward()
+                    v = getattr(variant, name).grad
+                    if v is not None and torch.allclose(g, v, atol=1e-5, rtol=1e-4):
+                        named = label
+                        break
+                raise Failed(tr(f"wrong gradient: the values are right, and the gradient with "
+                                f"respect to the actor's {name} is not the loss's:\n  expected "
+                                f"{rounded(r)}, got {rounded(g)}",
+                                f"梯度不对：数值对，但对演员的 {name} 的梯度不是这个损失的梯度：\n  "
+                                f"应该是 {rounded(r)}，得到的是 {rounded(g)}"))
+        except Failed as e:
+            raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {e}" + (tr(
+                "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
+                + named if named else "")) from None
+
+
 def compare(name, got, expected):
     """Raise Failed at the first difference between `got` and `expected` (tensors or numbers)."""
     if expected is None:
@@ -1106,6 +1438,10 @@ def worked_cases(ex, fn):
         return check_ddpg_store(fn)
     if ex.name == "ppo_rollout_step":
         return check_ppo_rollout(fn)
+    if ex.script == "dqn_cartpole" and ex.function == "dqn_update":
+        return check_dqn_target(fn)
+    if ex.script == "sac_walker" and ex.function == "compute_loss_actor":
+        return check_sac_actor_loss(fn)
     for what, args, expected in ex.cases():
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
         got = fn(*args)
@@ -1343,30 +1679,37 @@ def named_mistake(ex, args, got):
 # ==== Stage (b): the real loop, beside the script's own function ============================
 
 
+# The off-policy scripts' update functions, and what each logs at every gradient step in stage (b)
+UPDATES = dict(ddpg_walker=("ddpg_update", ("critic_loss", "actor_loss")),
+               td3_walker=("update_critics", ("critic_loss",)),
+               sac_walker=("update_actor_and_targets", ("actor_loss", "entropy")),
+               dqn_cartpole=("dqn_update", ("loss", "q", "next_max", "next_double")))
+
+
 def loop_logs(ex, fn, tmp):
     """The run's logs, per update: rows of numbers, with the learner's `fn` swapped in (or the
     script's own, fn=None)."""
     script = importlib.import_module(ex.script)
     swaps = [] if fn is None else [(ex.owner(), ex.function, fn)]
-    losses = []  # DDPG, TD3: every update's two losses, to 6 significant digits
-    update_fn = dict(ddpg_walker="ddpg_update", td3_walker="update_critics").get(ex.script)
+    losses = []  # the off-policy scripts: every gradient step's numbers, to 6 significant digits
+    update_fn, names = UPDATES.get(ex.script, (None, ()))
     if update_fn:
         # the learner's function where it is the update itself, else the script's own
         update = fn if fn is not None and ex.function == update_fn else getattr(script, update_fn)
 
         def recorded(*args):
             out = update(*args)
-            first, second = (out if isinstance(out, tuple) else (out, torch.tensor(0.0)))
-            losses.append(dict(critic_loss=f"{first.item():.6g}",
-                               actor_loss=f"{second.item():.6g}"))
+            values = list(out) if isinstance(out, tuple) else list(out.reshape(-1))
+            losses.append({k: f"{float(v):.6g}" for k, v in zip(names, values)})
             return out
         swaps = [s for s in swaps if s[1] != update_fn] + [(script, update_fn, recorded)]
     with swapped(swaps), contextlib.redirect_stdout(io.StringIO()):
         result = script.train(script.Config(**ex.loop, run_dir=str(tmp)))
     run = Path(result["run_dir"])
-    if update_fn:
-        if ex.script == "td3_walker":  # update_critics gives the critics' loss only
-            losses = [dict(critic_loss=row["critic_loss"]) for row in losses]
+    if ex.script == "dqn_cartpole":  # gradient steps, then the learning phases' progress.csv
+        return [dict(row, step=str(i + 1)) for i, row in enumerate(losses)] + [
+            dict(r, where="progress") for r in csv.DictReader(open(run / "progress.csv"))]
+    if update_fn:  # one update per env step after the warm-up, then the evaluations
         steps = [dict(row, step=str(ex.loop["start_steps"] + i + 1))
                  for i, row in enumerate(losses)]
         return steps + [dict(r, where="evaluation")
@@ -1408,15 +1751,20 @@ def real_loop(ex, fn):
                          + error(e, first_line=True))
     if calls[0] == 0:
         raise never_called(ex, tr("stage (b)", "第 (b) 关"))
-    unit = tr("step", "第 {} 步") if ex.script in ("ddpg_walker", "td3_walker") else tr(
-        "update", "第 {} 次更新")
+    unit = (tr("step", "第 {} 步") if ex.script in ("ddpg_walker", "td3_walker", "sac_walker")
+            else tr("gradient step", "第 {} 个梯度步") if ex.script == "dqn_cartpole"
+            else tr("update", "第 {} 次更新"))
     for i, (a, b) in enumerate(zip(reference, yours)):
         for key in a:
             if key in ("sps",) or a[key] == b.get(key):
                 continue
             n = a["step"] if "step" in a else i + 1
             where = (tr(f"evaluation at step {a['global_step']}", f"第 {a['global_step']} 步的评估")
-                     if a.get("where") else (f"{unit} {n}" if LANG == "en" else unit.format(n)))
+                     if a.get("where") == "evaluation" else
+                     tr(f"the learning phase ending at step {a['global_step']} (progress.csv)",
+                        f"在第 {a['global_step']} 步结束的那次学习（progress.csv）")
+                     if a.get("where") == "progress" else
+                     (f"{unit} {n}" if LANG == "en" else unit.format(n)))
             raise Failed(tr(f"{ex.script}.train() with your function: the logs first differ at "
                             f"{where}, in {key}: the script's own gives {a[key]}, yours "
                             f"{b.get(key)}",
@@ -1495,6 +1843,21 @@ GRPO_LOOP = dict(seed=0, sft_steps=20, grpo_steps=4, prompts=8, eval_every=20, e
                  curves=False, print_every=10**6)
 GRPO_LEARN = dict(seed=0, curves=False, print_every=10**6)
 GRPO_BAR = 0.9  # held-out pass@1 after GRPO: seeds 0-4 gave 0.941 to 0.955, the start 0.70-0.76
+
+# DQN: the tests' short run, Double DQN (both next-state values logged either way), 4 gradient
+# steps per phase; learning: the defaults, CartPole-v1 solved (seed 0: at 35,378 steps)
+DQN_LOOP = dict(seed=0, total_timesteps=1200, start_steps=200, train_freq=100, gradient_steps=4,
+                q_check_every=2, stop_when_solved=False, double=True, gifs=False, curves=False,
+                eval_episodes=1, print_every=10**6)
+DQN_LEARN = CARTPOLE_LEARN
+# SAC: the DDPG loop's task; learning: tests/test_sac_walker.py's run (InvertedPendulum-v5,
+# 25,000 steps; seed 0 holds 1000 from step 22,500 on)
+SAC_FAST = dict(env_id="InvertedPendulum-v5", start_steps=1000, eval_every=2500, hidden=128,
+                batch_size=128, actor_lr=1e-3, critic_lr=1e-3, alpha_lr=1e-3, gifs=False,
+                curves=False, cuda=False, seed=0)
+SAC_LOOP = dict(SAC_FAST, total_timesteps=600, start_steps=300, eval_every=100, eval_episodes=1,
+                print_every=1)
+SAC_LEARN = dict(SAC_FAST, total_timesteps=25_000, print_every=10**6)
 
 
 def ON_REAL_DATA():
@@ -1595,6 +1958,18 @@ EXERCISES = {ex.name: ex for ex in (
                         "每批 rollout 都由你的函数存下，每个动作都在它返回的观测上选：第一次不同的"
                         "更新，\n  就是它们在真实的步上（8 个环境、自动重置步）开始不同的地方。"),
              outputs=("obs", "autoreset")),
+    exercise("dqn_target", "dqn_cartpole", "dqn_update", "dqn_cartpole", lambda: [],
+             DQN_LOOP, DQN_LEARN,
+             lambda: tr("Q is trained toward your target at every gradient step (here with "
+                        "--double; both next-state values\n  are logged either way): the first "
+                        "gradient step that differs is where your target differs on real data.",
+                        "Q 每个梯度步都朝你的目标训练（这里开着 --double；两种下一状态的价值都会记录）："
+                        "\n  第一个不同的梯度步，就是你的目标在真实数据上开始不同的地方。"),
+             outputs=("stats",)),
+    exercise("sac_actor_loss", "sac_walker", "compute_loss_actor", "sac_walker", lambda: [],
+             SAC_LOOP, SAC_LEARN, lambda: tr("The actor descends your loss, and alpha follows "
+                                            "your log pi. ", "演员沿你的损失下降，alpha 跟着你的 log pi 调整。")
+             + OFF_POLICY(), outputs=("actor_loss", "logp")),
 )}
 
 

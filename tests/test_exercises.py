@@ -14,10 +14,44 @@ import check  # noqa: E402
 
 HEADER = """
 import numpy as np
+import math
 import torch
 import torch.nn.functional as F
 from torch.distributions import Categorical, kl_divergence
 """
+
+def dqn_answer(lines):
+    """dqn_target's function with `lines` where the blank is (next_max and next_double from
+    q_next = Q'(s', .)), then the script's own y and lines."""
+    target = textwrap.indent(textwrap.dedent("            " + lines), " " * 8)
+    return ("def dqn_update(q_net, q_target, optimizer, batch, cfg):\n"
+            "    obs, action, reward, next_obs, not_done = batch\n"
+            "    with torch.no_grad():\n"
+            "        q_next = q_target(next_obs)\n" + target + "\n"
+            "        y = reward + cfg.gamma * not_done * (\n"
+            "            next_double if cfg.double else next_max)\n"
+            "    q = q_net(obs).gather(-1, action[:, None]).squeeze(-1)\n"
+            "    loss = F.smooth_l1_loss(q, y)\n"
+            "    optimizer.zero_grad()\n"
+            "    loss.backward()\n"
+            "    optimizer.step()\n"
+            "    return torch.stack([loss.detach(), q.detach().mean(), next_max.mean(),\n"
+            "                        next_double.mean()])\n",)
+
+
+def sac_answer(log_slope="torch.log(actor.scale) + 2 * (math.log(2) - u - F.softplus(-2 * u))",
+               q_at="action", logp_at="u", critics="torch.min", loss="(alpha * logp - q).mean()",
+               draw="u_dist.rsample()", reduce="sum"):
+    """sac_actor_loss's function, the script's lines but for the one named."""
+    return f"""def compute_loss_actor(actor, critic, critic2, obs, alpha):
+                u_dist = actor.distribution(obs)
+                u = {draw}
+                action = actor.bias + actor.scale * torch.tanh(u)
+                log_slope = {log_slope}
+                logp = (u_dist.log_prob({logp_at}) - log_slope).{reduce}(-1)
+                q = {critics}(critic(obs, {q_at}), critic2(obs, {q_at}))
+                return {loss}, logp"""
+
 
 # name: [(wrong answer, the stage that must catch it, words its message must hold)]
 WRONG = {
@@ -557,6 +591,52 @@ WRONG = {
                         pt = tau * p + (1 - tau) * pt  # a new tensor; the target stays""", "(a)",
          "expected 0.1"),
     ],
+    "dqn_target": [dqn_answer(lines) + (stage, needle) for lines, stage, needle in [
+        ("""next_max = q_net(next_obs).max(-1).values  # the online net's max
+            a_star = q_net(next_obs).argmax(-1, keepdim=True)
+            next_double = q_next.gather(-1, a_star).squeeze(-1)""",
+         "(a)", "max_a Q(s', a) of the network being trained"),
+        ("""next_max = q_next.max(-1).values  # Double: the target picks, the online net values
+            a_star = q_next.argmax(-1, keepdim=True)
+            next_double = q_net(next_obs).gather(-1, a_star).squeeze(-1)""",
+         "(a)", "Double DQN the other way round"),
+        ("""next_max = q_next.max(-1).values
+            a_star = q_net(next_obs).argmax(-1, keepdim=True)
+            next_double = q_next.gather(-1, a_star).squeeze(-1)
+            not_done = torch.ones_like(reward)  # bootstraps at a termination""",
+         "(a)", "a future after a termination"),
+        ("""next_max = q_next.max(-1).values
+            a_star = q_net(next_obs).argmax(-1, keepdim=True)
+            next_double = q_next.gather(-1, a_star).squeeze(-1)
+            cfg = type(cfg)(**{**vars(cfg), "double": False})  # --double ignored""",
+         "(a)", "DQN's target, where --double asks for Double DQN's"),
+        ("""next_max = q_next.max(-1).values
+            next_double = q_next.gather(-1, q_net(next_obs).argmax(-1, keepdim=True))  # (B, 1)""",
+         "(a)", "y broadcasts to (B, B)"),
+        ("""next_max = q_next.max(-1).values
+            a_star = q_net(next_obs).argmax(-1, keepdim=True)
+            next_double = q_next.gather(-1, a_star).squeeze(-1)
+            not_done = 1 - not_done  # as if it were terminated""",
+         "(a)", "not_done is already 1 - terminated"),
+    ]],
+    "sac_actor_loss": [(sac_answer(**lines), stage, needle) for lines, stage, needle in [
+        (dict(log_slope="torch.zeros_like(u)  # no correction"), "(a)", "no tanh correction"),
+        (dict(log_slope="-(torch.log(actor.scale) + 2 * (math.log(2) - u - F.softplus(-2 * u)))"),
+         "(a)", "the correction's sign flipped"),
+        (dict(log_slope="torch.log(actor.scale * (1 - torch.tanh(u) ** 2))  # log(0) in the tail"),
+         "(a)", "log(1 - tanh(u)^2) computed directly"),
+        (dict(log_slope="torch.log(actor.scale * (1 - torch.tanh(u) ** 2 + 1e-6))"), "(a)",
+         "the epsilon keeps it finite"),
+        (dict(log_slope="2 * (math.log(2) - u - F.softplus(-2 * u))  # scale left out"), "(a)",
+         "scale left out of the correction"),
+        (dict(q_at="u"), "(a)", "the pre-squash sample u"),
+        (dict(logp_at="action"), "(a)", "log density taken at the squashed action"),
+        (dict(critics="torch.max"), "(a)", "max(Q1, Q2) where SAC takes the smaller"),
+        (dict(loss="(-alpha * logp - q).mean()"), "(a)", "the entropy term's sign"),
+        (dict(draw="u_dist.sample()"), "(a)", "sample(), not rsample()"),
+        (dict(loss="(alpha * logp.detach() - q).mean()"), "(a)", "log pi detached in the loss"),
+        (dict(reduce="mean"), "(a)", "averaged over the action's dimensions"),
+    ]],
 }
 
 
@@ -752,13 +832,14 @@ def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monk
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target"])
+@pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target", "dqn_target",
+                                  "sac_actor_loss"])
 def test_the_scripts_own_functions_learn(name):
     """Stage (c) with the scripts' own functions: one exercise per script (the others of the
     same script run the very same training)."""
     ex = check.EXERCISES[name]
     result = check.learns(ex, getattr(ex.owner(), ex.function))
-    if ex.script == "ddpg_walker":  # from falling within ~100 steps to balancing all 1000
+    if ex.script in ("ddpg_walker", "sac_walker"):  # from falling to balancing all 1000
         assert result["evaluations"][0]["eval_mean"] < 200  # (seeds 0-4 reach 1000: docs/experiments.md)
         assert [e["eval_mean"] for e in result["evaluations"][-check.HOLD:]] == [1000] * check.HOLD
 

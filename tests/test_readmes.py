@@ -260,3 +260,41 @@ def test_readme_ddpg_table_comes_from_the_committed_records(capsys):
         assert row in td3_section.splitlines(), f"docs/results.md's TD3 section lacks {row!r}"
     for summary in [line for line in td3_out if line.startswith("Over the ")]:
         assert summary in " ".join(td3_section.split()), f"the TD3 section lacks {summary!r}"
+
+
+def dqn_section(path, heading):
+    page = path.read_text(encoding="utf-8")
+    assert heading in page, f"{path.name} lacks its DQN section {heading!r}"
+    return page.split(heading)[1].split("\n## ")[0]
+
+
+DQN_PAGES = [(RESULTS, "## DQN on CartPole-v1"),
+             (ROOT / "docs" / "results.zh-CN.md", "## DQN 在 CartPole-v1 上")]
+
+
+@pytest.mark.parametrize("path,heading", DQN_PAGES)
+def test_results_dqn_figures_come_from_the_committed_records(path, heading):
+    """The DQN section of each results page: its per-seed table is the record's rows of the
+    defaults' commit (benchmarks/results/dqn_cartpole_seeds.csv), and its side-by-side table
+    with SB3's DQN and the summary under it are what `bench_dqn.py --table` prints from
+    benchmarks/results/dqn_sb3_cartpole.csv (no cell typed by hand, none left stale)."""
+    import csv
+
+    section = dqn_section(path, heading)
+    lines = section.splitlines()
+    with open(ROOT / "benchmarks" / "results" / "dqn_cartpole_seeds.csv", newline="") as f:
+        record = [r for r in csv.DictReader(f) if r["commit"] == "80c09bf"]
+    assert len(record) == 5
+    for r in record:
+        row = f"| {r['seed']} | {int(r['solved_step']):,} | {float(r['solved_seconds']):.1f} |"
+        assert row in lines, f"{path.name}'s DQN section lacks {row!r}"
+    spec = importlib.util.spec_from_file_location("bench_dqn", ROOT / "benchmarks" / "bench_dqn.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    printed = bench.table(bench.read_rows())
+    shown = [line for line in printed if line.startswith("| ")]  # header and seed rows
+    for row in shown if path == RESULTS else [r for r in shown if re.match(r"\| \d", r)]:
+        assert row in lines, f"{path.name}'s DQN section lacks the table row {row!r}"
+    if path == RESULTS:  # the summary in English; the Chinese page says it in Chinese
+        for summary in [line for line in printed if not line.startswith("|")]:
+            assert summary in " ".join(section.split()), f"docs/results.md lacks {summary!r}"
