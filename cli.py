@@ -49,7 +49,8 @@ class OutputFlags:
     """episodes of each evaluation (the periodic ones, the solved rule's checks, the last one,
     --eval)"""
     eval_seed: int = 10_000
-    """seed of the evaluation env (and its action draws), kept apart from the training seed"""
+    """seed of the evaluation env (and of its action draws, for a policy that samples), kept
+    apart from the training seed"""
     watch: bool = False
     """after training (or with --eval), play the policy in a window; needs a display"""
     eval: str | None = None
@@ -134,7 +135,8 @@ def parse_config(cls, argv=None, description=None):
     zh_docs = help_zh.flags(Path(inspect.getfile(cls)).stem, module) if zh else {}
     parser = argparse.ArgumentParser(description=help_zh.overview(cls, description) if zh else
                                      description, allow_abbrev=False, epilog=help_zh.HINT,
-                                     formatter_class=help_zh.HelpFormatter)
+                                     formatter_class=help_zh.HelpFormatterZh if zh
+                                     else help_zh.HelpFormatter)
     parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage
     docs = {}
     for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
@@ -150,7 +152,7 @@ def parse_config(cls, argv=None, description=None):
         flag = "--" + f.name.replace("_", "-")
         text = docs.get(f.name, "") + (f"; none on the command line: {flag} none"
                                        if "None" in name else "")
-        chinese = zh_docs.get(f.name, "（还没有中文说明）") + (f"；命令行上写作 {flag} none"
+        chinese = zh_docs.get(f.name, "（还没有中文说明）") + (f"；默认不设；要在命令行上明确写出“不设”，用 {flag} none"
                                                             if "None" in name else "")
         text = (text + (f"\n{chinese}" if zh else "")).replace("%", "%%")
         parser.add_argument(flag, default=f.default, **how, help=argparse.SUPPRESS if f.name in

@@ -80,6 +80,14 @@ class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
                            for part in text.split("\n\n"))
 
 
+class HelpFormatterZh(HelpFormatter):
+    """HelpFormatter for --help-zh: argparse's own -h, --help gets its Chinese line too."""
+
+    def _get_help_string(self, action):
+        text = super()._get_help_string(action)
+        return text + "\n显示本帮助并退出" if action.dest == "help" else text
+
+
 WIDE = re.compile(r"[\u3000-\u303f\u4e00-\u9fff\uff00-\uffef]")  # two columns each
 TOKEN = re.compile(r"[\u3000-\u303f\u4e00-\u9fff\uff00-\uffef]|[^\s\u3000-\u303f\u4e00-\u9fff"
                    r"\uff00-\uffef]+|\s+")  # a Chinese character, a word or a space

@@ -321,6 +321,8 @@ def test_help_zh_puts_each_chinese_line_under_its_english_one_within_the_width(c
     assert lines[at + 1].strip().endswith("(default: 0.99)"), lines[at:at + 3]  # English first
     assert lines[at + 2].strip() == "折扣因子（0.98 到 0.999）；0.99 大约往前看 100 步", lines[at:at + 3]
     assert "中文导读：PPO-clip" in out and out.rstrip().endswith(help_zh.HINT)
+    at = next(i for i, line in enumerate(lines) if line.lstrip().startswith("-h, --help"))
+    assert lines[at + 1].strip() == "显示本帮助并退出", lines[at:at + 2]  # argparse's own flag too
     too_wide = [line for line in lines if columns(line) > 80]
     assert not too_wide, too_wide
     monkeypatch.setenv("LANG", "zh_CN.UTF-8")  # a Chinese locale: plain --help has them too
