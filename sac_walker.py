@@ -26,7 +26,7 @@ curve.png, inside.png, and checkpoint.pt, from which --resume continues the run 
     python sac_walker.py --resume runs/latest      # continue a stopped or killed run exactly
     python sac_walker.py --eval runs/latest/best.pt --watch    # replay a saved actor
 
-中文导读：SAC（柔性演员-评论员）保留 TD3 的两个评论员，换上随机策略，并把策略的熵算进回报
+中文导读：SAC（软演员-评论员，soft actor-critic）保留 TD3 的两个评论员，换上随机策略，并把策略的熵算进回报
 （最大熵强化学习）。和 TD3 相比有四处不同。一、演员输出高斯分布，采样后用 tanh 压缩到动作范围；
 采样用重参数化，梯度能穿过采样传回演员；对数概率要减去 tanh 的雅可比修正。二、软 TD 目标：两个
 目标评论员中较小的 Q 减去 α log π(a′|s′)，a′ 从当前策略采样；没有目标演员。三、演员的目标是
