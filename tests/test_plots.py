@@ -359,3 +359,17 @@ def test_text_shows_every_line_in_order():
     (ax,) = drawn(plots.text(lines, "answers"), dict(kept=[], labels={}))
     assert [t.get_text() for t in ax.texts] == ["1+2= 03. 04.x\n5+5= 10. 11.x\n9+9= 18. 18."]
     assert ax.get_title() == "answers" and not ax.axison
+
+
+def test_tensorboard_leaves_out_a_text_column(tmp_path):
+    """A stage's name is text: no scalar of it, the numbers beside it written."""
+    pytest.importorskip("tensorboard")
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+    import plots
+
+    (tmp_path / "progress.csv").write_text("global_step,phase,loss\n1,sft,0.5\n2,rm,0.25\n")
+    plots.to_tensorboard(tmp_path)
+    events = EventAccumulator(str(tmp_path))
+    events.Reload()
+    assert events.Tags()["scalars"] == ["charts/loss"]
+    assert [(e.step, e.value) for e in events.Scalars("charts/loss")] == [(1, 0.5), (2, 0.25)]
