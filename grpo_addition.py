@@ -484,14 +484,7 @@ def train(cfg: Config):
         print(f"after {second}: held-out pass@1 {result['after'][0]:.3f}, pass@{cfg.group_size} "
               f"{result['after'][1]:.3f} (phase {second} took {time.time() - phase_start:.0f} s)",
               flush=True)
-    if (run.dir / "progress.csv").exists():  # also after a Ctrl-C: what was logged
-        if cfg.tensorboard:
-            plots.to_tensorboard(run.dir)
-        if cfg.curves:
-            with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-                curve, inside = report.draw_pictures(run, pictures(cfg, sft_steps,
-                                                                   result["samples"]))
-                print(f"curve: {curve}\ninside: {inside}", flush=True)
+    report.draw_logged(run, pictures(cfg, sft_steps, result["samples"]))  # also after a Ctrl-C
     return dict(result, interrupted=run.interrupted)
 
 

@@ -66,6 +66,20 @@ def draw_pictures(run, pictures, top=None, maps=None):
     return curve, inside
 
 
+def draw_logged(run, pictures):
+    """After the training of a script without an env, a Ctrl-C too: curve.png and inside.png
+    of what was logged (draw_pictures, --curves) and its TensorBoard scalars (--tensorboard);
+    nothing before the first logged row."""
+    if not (run.dir / "progress.csv").exists():
+        return
+    if run.cfg.tensorboard:
+        plots.to_tensorboard(run.dir, tags=run.tags)
+    if run.cfg.curves:
+        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+            curve, inside = draw_pictures(run, pictures)
+            print(f"curve: {curve}\ninside: {inside}", flush=True)
+
+
 def finish_updates(run, threshold, play, before, pictures, maps=None):
     """After the training of a script that updates on batches: curve.png and inside.png
     (draw_pictures; `maps`: None, or a function that makes the maps), TensorBoard, an

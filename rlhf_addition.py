@@ -460,10 +460,8 @@ def train(cfg: Config):
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
-    elif cfg.curves:
-        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            curve, inside = report.draw_pictures(run, pictures(r_w - shift, r_l - shift))
-            print(f"curve: {curve}\ninside: {inside}", flush=True)
+    else:
+        report.draw_logged(run, pictures(r_w - shift, r_l - shift))
     return dict(result, interrupted=run.interrupted)
 
 
