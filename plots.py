@@ -59,7 +59,8 @@ def pyplot():
 # ("progress", "evaluations", "episodes": {column: array}), "kept" (per update: (env step,
 # {name: array})) and "labels" ({column: what it is}, from the script's declaration of what
 # it logs). The scripts choose their panels from the builders below; none of them knows a
-# script. Every axis of a row has the same width.
+# script. A few hold what they show, handed over when the script declares them (maps_row's
+# maps, distributions' arrays, text's lines). Every axis of a row has the same width.
 
 
 def load_logs(run_dir, kept=(), labels=None):
