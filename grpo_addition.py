@@ -42,6 +42,7 @@ import checkpoints
 import cli
 import common
 import plots
+import report
 import runlog
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
@@ -483,63 +484,30 @@ def train(cfg: Config):
         print(f"after {second}: held-out pass@1 {result['after'][0]:.3f}, pass@{cfg.group_size} "
               f"{result['after'][1]:.3f} (phase {second} took {time.time() - phase_start:.0f} s)",
               flush=True)
-    pictures(run, result["samples"], cfg, sft_steps)  # also after Ctrl-C: what was logged
+    report.draw_logged(run, pictures(cfg, sft_steps, result["samples"]))  # also after a Ctrl-C
     return dict(result, interrupted=run.interrupted)
 
 
-def pictures(run, samples, cfg, sft_steps):
-    """curve.png (--curves): each phase on its own steps, held-out pass@1 over both; the reward,
-    the KL to pi_ref and the groups without signal in GRPO's, the cross-entropy in a baseline's.
+def pictures(cfg, sft_steps, samples):
+    """curve.png: each phase on its own steps, held-out pass@1 in both; the reward, the KL to
+    pi_ref and the groups without signal in GRPO's, the cross-entropy in a baseline's.
     inside.png: the per-token ratio at three GRPO updates against the clip band, and held-out
-    sums' answers before and after (x: wrong). TensorBoard (--tensorboard). From progress.csv:
-    also after a Ctrl-C, what was logged."""
-    if not (run.dir / "progress.csv").exists():  # stopped before the first logged row
-        return
-    if cfg.tensorboard:
-        plots.to_tensorboard(run.dir)
-    if not cfg.curves:
-        return
-    baseline, plt = cfg.rft or cfg.more_labels, plots.pyplot()
-    log = plots.read_csv(run.dir / "progress.csv")
+    sums' answers before and after (x: wrong)."""
     second = "RFT" if cfg.rft else "more labels" if cfg.more_labels else "GRPO"
-    x, checked = log["global_step"], np.isfinite(log["pass1"])
-    fig, axes = plt.subplots(2, 2, figsize=(10, 5.5), gridspec_kw=dict(width_ratios=[1, 2]))
-    for column, (phase, steps) in enumerate((("supervised", x <= sft_steps),
-                                             (second, x > sft_steps))):
-        top, bottom = axes[:, column]  # each phase on its own step axis: GRPO's is shorter
-        if column == 1 and not cfg.more_labels:  # sampled answers: their reward, the KL
-            top.plot(x[steps], log["reward"][steps], lw=0.8, label=run.labels["reward"])
-            for key, color in (("kl", "C4"), ("flat_groups", "C7")):
-                bottom.plot(x[steps], log[key][steps], color=color, lw=0.8, label=run.labels[key])
-        if column == 0 or baseline:
-            bottom.plot(x[steps & checked], log["loss"][steps & checked], color="C1", lw=1,
-                        label="cross-entropy")
-        top.plot(x[steps & checked], log["pass1"][steps & checked], "o-", color="C3", ms=3,
-                 label=run.labels["pass1"])
-        top.set_title(phase, fontsize=9)
-        bottom.set_xlabel("step")
-        for ax in (top, bottom):
-            ax.legend(fontsize=7)
-    fig.suptitle(run.dir.name, fontsize=8)
-    with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-        print(f"curve: {plots.save_whole(plt, fig, run.dir / 'curve.png', dpi=90)}", flush=True)
-        fig = plt.figure(figsize=(12, 8))
-        grid = fig.add_gridspec(3, 3, hspace=0.5)
-        updates = [k for k in run.kept if "ratio" in k[1]]  # none in a baseline
-        for column, (update, step, arrays) in enumerate(plots.three_updates(updates)):
-            ax = fig.add_subplot(grid[0, column])
-            ax.hist(arrays["ratio"], bins=40, color="C0")
-            for v in (1 - cfg.clip_coef, 1 + cfg.clip_coef):
-                ax.axvline(v, color="k", ls="--", lw=0.8)
-            ax.set_title(f"per-token r = pi/pi_old, GRPO update {update}", fontsize=8)
-        for row, when in enumerate(("before", "after"), start=1):
-            ax = fig.add_subplot(grid[row, :])
-            ax.axis("off")
-            ax.set_title(f"{len(samples.get(when, []))} held-out sums, {cfg.group_size} sampled "
-                         f"answers each (x: wrong), {when} {second}", fontsize=9)
-            ax.text(0, 1, "\n".join(samples.get(when, [])), va="top", family="monospace",
-                    fontsize=8)
-        print(f"inside: {plots.save_whole(plt, fig, run.dir / 'inside.png', dpi=72)}", flush=True)
+    first = dict(within=(1, sft_steps), xlabel="step")  # progress.csv's rows of each phase
+    then = dict(within=(sft_steps + 1, np.inf), xlabel="step")
+    baseline = cfg.rft or cfg.more_labels  # its loss is a cross-entropy; it keeps no ratio
+    ratios = [] if baseline else [[plots.histograms("ratio", band=(1 - cfg.clip_coef,
+                                                                   1 + cfg.clip_coef))]]
+    answers = [[plots.text(samples.get(when, []), f"{len(samples.get(when, []))} held-out "
+                           f"sums, {cfg.group_size} sampled answers each (x: wrong), {when} "
+                           f"{second}")] for when in ("before", "after")]
+    return dict(curve=[[plots.lines("pass1", title="supervised", **first),
+                        plots.lines("pass1", "reward", title=second, **then)],
+                       [plots.lines("loss", title="cross-entropy", **first),
+                        plots.lines(*(["loss"] if baseline else []), "kl", "flat_groups",
+                                    **then)]],
+                inside=ratios + answers)
 
 
 def main(argv=None):

@@ -23,12 +23,20 @@ import numpy as np
 
 
 def read_csv(path):
-    """A CSV file as {column: float array}; empty cells are nan."""
+    """A CSV file as {column: float array}; empty cells are nan. A column of text (a stage's
+    name) stays an array of its strings."""
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
     columns = rows[0].keys() if rows else []
-    return {k: np.array([float(r[k]) if r[k] not in ("", None) else np.nan for r in rows])
-            for k in columns}
+    return {k: numbers_or_text([r[k] for r in rows]) for k in columns}
+
+
+def numbers_or_text(cells):
+    """CSV cells -> a float array (empty cells: nan), or, where one is not a number, the text."""
+    try:
+        return np.array([float(c) if c not in ("", None) else np.nan for c in cells])
+    except ValueError:
+        return np.array([c or "" for c in cells])
 
 
 def running_mean(y, k):
@@ -51,7 +59,8 @@ def pyplot():
 # ("progress", "evaluations", "episodes": {column: array}), "kept" (per update: (env step,
 # {name: array})) and "labels" ({column: what it is}, from the script's declaration of what
 # it logs). The scripts choose their panels from the builders below; none of them knows a
-# script. Every axis of a row has the same width.
+# script. A few hold what they show, handed over when the script declares them (maps_row's
+# maps, distributions' arrays, text's lines). Every axis of a row has the same width.
 
 
 def load_logs(run_dir, kept=(), labels=None):
@@ -65,8 +74,10 @@ def load_logs(run_dir, kept=(), labels=None):
     return logs
 
 
-def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=72):
-    """Write run_dir/<name> from `rows` of panels; returns its path."""
+def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=72,
+         wspace=0.7):
+    """Write run_dir/<name> from `rows` of panels; returns its path. `wspace`: the space
+    between two axes of a row, as a share of an axis' width."""
     run_dir, plt = Path(run_dir), pyplot()
     heights = heights or [row_height] * len(rows)
     total = sum(heights) + 0.5  # inches; half an inch for the title
@@ -74,7 +85,7 @@ def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=
     grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=0.07,
                             right=0.95, top=1 - 0.55 / total, bottom=0.5 / total)
     for cell, row in zip(grid, rows):
-        sub = cell.subgridspec(1, sum(n for n, _ in row), wspace=0.7)
+        sub = cell.subgridspec(1, sum(n for n, _ in row), wspace=wspace)
         at = 0
         for n, fill in row:
             fill([fig.add_subplot(sub[0, at + i]) for i in range(n)], logs)
@@ -130,45 +141,60 @@ def evaluation_returns():
 
 
 def lines(*columns, title=None, right=(), log=False, ylim=None, between=None, hlines=(),
-          steps=False):
+          steps=False, within=None, where=None, x="global_step", x_of=None, xlabel="env steps"):
     """Panel: `columns` of the run's table over env steps, labelled as declared; `right`:
     more columns on a log-scaled right axis; `between`: (low, high, label) shaded; `hlines`:
     dashed levels; `steps`: drawn as steps, each rise and fall marked. A column measured only
-    at some rows (None elsewhere) is drawn at those rows, as points. A column the log lacks
-    stops the picture with a KeyError naming it."""
+    at some rows (None elsewhere) is drawn at those rows, as points; one with no value in the
+    rows drawn is left out. A column the log lacks stops the picture with a KeyError naming it.
+    Only some rows, e.g. a stage on its own axis: `within`: (first, last) env step, both
+    drawn; `where`: (column, value), the rows whose column holds value (a stage's name).
+    Against another column: `x`, each row a point, joined in the log's order; `x_of`: a
+    function of that column drawn instead (e.g. its square root); `xlabel`: what x is."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
-        x = table["global_step"]
-        missing = [c for c in (*columns, *right) if c not in table]
+        needed = (*columns, *right, x, *([where[0]] if where else []))
+        missing = [c for c in needed if c not in table]
         if missing:
             raise KeyError(f"a panel draws {missing}, which the run's log lacks (columns: "
                            f"{sorted(table)})")
+        rows = np.ones(len(table[x]), dtype=bool)
+        if within is not None:
+            rows &= (table["global_step"] >= within[0]) & (table["global_step"] <= within[1])
+        if where is not None:
+            rows &= table[where[0]] == where[1]
+        xs = (x_of(table[x]) if x_of else table[x])[rows]
         if between is not None:
             ax.axhspan(between[0], between[1], color="C2", alpha=0.2, label=between[2])
         for i, column in enumerate(columns):
-            y, at = table[column], np.isfinite(table[column])
-            sparse = 0 < at.sum() < len(at) and not steps  # measured at some rows only
-            ax.plot(x[at] if sparse else x, y[at] if sparse else y, "o-" if sparse else "-",
+            y = table[column][rows]
+            at = np.isfinite(y)
+            if not at.any():  # not measured in these rows (another stage's number)
+                continue
+            sparse = (at.sum() < len(at) or x != "global_step") and not steps
+            ax.plot(xs[at] if sparse else xs, y[at] if sparse else y, "o-" if sparse else "-",
                     ms=3, color=f"C{i + 1}", lw=1, label=labels.get(column, column),
                     drawstyle="steps-post" if steps else None)
             if steps:  # the value the next row has: up or down from here
                 nxt = np.append(y[1:], np.nan)
                 for changed, marker, what in ((nxt > y, "^", "rises next"),
                                               (nxt < y, "v", "falls next")):
-                    ax.scatter(x[changed], y[changed], marker=marker, s=18, label=what)
-        for y in hlines:
-            ax.axhline(y, color="k", ls="--", lw=0.8)
-        ax.set(yscale="log" if log else "linear", xlabel="env steps")
+                    ax.scatter(xs[changed], y[changed], marker=marker, s=18, label=what)
+        for level in hlines:
+            ax.axhline(level, color="k", ls="--", lw=0.8)
+        ax.set(yscale="log" if log else "linear", xlabel=xlabel)
         if ylim is not None:
             ax.set_ylim(*ylim)
         if title:
             ax.set_title(title, fontsize=9)
-        ax.legend(fontsize=7, loc="upper left")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="upper left")
         shown = list(right)
         if shown:
             twin = ax.twinx()
             for column, color in zip(shown, ("C3", "C4", "C5")):
-                twin.plot(x, table[column], color=color, lw=1, label=labels.get(column, column))
+                twin.plot(xs, table[column][rows], color=color, lw=1,
+                          label=labels.get(column, column))
             twin.set_yscale("log")
             twin.legend(loc="upper right", fontsize=8)
     return 1, fill
@@ -199,27 +225,59 @@ def three_updates(kept):
     return [(i + 1, *kept[i]) for i in picks]
 
 
-def histograms(array, by_sign_of, band):
-    """Panels (3): the kept `array` at an early, a middle and a late update, split by the sign
-    of the kept `by_sign_of`; `band`: (low, high) dashed, and shaded outside where a sample of
-    that sign gets no gradient (the clip binds: above high for +, below low for -)."""
+def histograms(array, by_sign_of=None, band=None):
+    """Panels (3): the kept `array` at an early, a middle and a late update of those that keep
+    it (update k: the k-th of them), split by the sign of the kept `by_sign_of` if given;
+    `band`: (low, high) dashed, and, split by sign, shaded outside where a sample of that sign
+    gets no gradient (the clip binds: above high for +, below low for -)."""
     def fill(axes, logs):
-        lo, hi = band
-        for ax, (update, step, arrays) in zip(axes, three_updates(logs["kept"])):
-            r, sign = arrays[array], np.sign(arrays[by_sign_of])
-            bins = np.linspace(min(r.min(), 2 * lo - 1), max(r.max(), 2 * hi - 1), 40)
-            for s, color in ((1, "C2"), (-1, "C3")):  # one polygon each
-                ax.hist(r[sign == s], bins=bins, color=color, alpha=0.6, histtype="stepfilled",
-                        label=f"{by_sign_of} {'>' if s > 0 else '<'} 0")
-            ax.axvspan(hi, bins[-1], color="C2", alpha=0.08)
-            ax.axvspan(bins[0], lo, color="C3", alpha=0.08)
-            for v in band:
+        lo, hi = band if band is not None else (np.inf, -np.inf)
+        kept = [k for k in logs["kept"] if array in k[1]]  # e.g. none in a supervised stage
+        for ax, (update, step, arrays) in zip(axes, three_updates(kept)):
+            r = arrays[array]
+            if by_sign_of is None:  # bins over the values, fine where they crowd; band: dashed
+                ax.hist(r, bins=40, color="C0", histtype="stepfilled")
+            else:  # bins on past the band, where the shading shows
+                bins = np.linspace(min(r.min(), 2 * lo - 1), max(r.max(), 2 * hi - 1), 40)
+                sign = np.sign(arrays[by_sign_of])
+                for s, color in ((1, "C2"), (-1, "C3")):  # one polygon each
+                    ax.hist(r[sign == s], bins=bins, color=color, alpha=0.6,
+                            histtype="stepfilled", label=f"{by_sign_of} {'>' if s > 0 else '<'} 0")
+                if band is not None:
+                    ax.axvspan(hi, bins[-1], color="C2", alpha=0.08)
+                    ax.axvspan(bins[0], lo, color="C3", alpha=0.08)
+            for v in band or ():
                 ax.axvline(v, color="k", ls="--", lw=0.8)
             ax.set_title(f"{array} at update {update} (step {step})", fontsize=8)
-            ax.set_xlabel(f"{array}; shaded: no gradient for that colour", fontsize=7)
-        if axes and logs["kept"]:
+            ax.set_xlabel(f"{array}; shaded: no gradient for that colour" if by_sign_of and band
+                          else array, fontsize=7)
+        if axes and kept and by_sign_of is not None:
             axes[0].legend(fontsize=7)
     return 3, fill
+
+
+def distributions(arrays, title, xlabel):
+    """Panel: histograms of `arrays` ({label: numbers}), over the same bins, one on another."""
+    def fill(axes, logs):
+        ax, values = axes[0], [np.asarray(a, dtype=float) for a in arrays.values()]
+        bins = np.histogram_bin_edges(np.concatenate(values), bins=40)
+        for i, (label, a) in enumerate(zip(arrays, values)):
+            ax.hist(a, bins=bins, color=f"C{i}", alpha=0.6, label=label)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel(xlabel)
+        ax.legend(fontsize=7)
+    return 1, fill
+
+
+def text(lines, title, fontsize=8):
+    """Panel: `lines` of text (e.g. sampled answers), top-down in a fixed-width font, no axes."""
+    def fill(axes, logs):
+        ax = axes[0]
+        ax.axis("off")
+        ax.set_title(title, fontsize=9)
+        ax.text(0, 1, "\n".join(lines), va="top", family="monospace", fontsize=fontsize,
+                transform=ax.transAxes)
+    return 1, fill
 
 
 def scatters(x, y, xlabel, ylabel):
@@ -295,7 +353,8 @@ def to_tensorboard(run_dir, sps=None, tags=None):
             table = read_csv(run_dir / name)
             for i, step in enumerate(table["global_step"]):
                 for key, values in table.items():
-                    if key not in ("global_step", "episodes") and np.isfinite(values[i]):
+                    if (key not in ("global_step", "episodes") and values.dtype.kind == "f"
+                            and np.isfinite(values[i])):  # text (a stage's name): no scalar
                         tag = {**TAGS, **(tags or {})}.get(key, f"charts/{key}")
                         writer.add_scalar(tag, values[i], int(step))
         if sps is not None:

@@ -42,13 +42,17 @@ def pi_holds(play, cfg, threshold, step):
     return held
 
 
-def draw_pictures(run, pictures, top, maps=None):
-    """curve.png (the panel `top`, then pictures["curve"]'s rows) and inside.png
-    (pictures["inside"]'s rows, then `maps`' row if there are maps, kept in maps.npz too).
-    Returns the two paths."""
+def draw_pictures(run, pictures, top=None, maps=None):
+    """curve.png (the panel `top`, then pictures["curve"]'s rows; without a `top`, its rows
+    alone, each as high as inside.png's) and inside.png (pictures["inside"]'s rows, then
+    `maps`' row if there are maps, kept in maps.npz too). Returns the two paths."""
     logs = plots.load_logs(run.dir, getattr(run, "kept", ()), run.labels)
-    curve = plots.draw(run.dir, "curve.png", [[top], *pictures.get("curve", [])], logs,
-                       width=7, heights=[3.2] + [1.6] * len(pictures.get("curve", [])), dpi=90)
+    rows = pictures.get("curve", [])
+    if top is not None:  # the returns on top, the rows under it lower
+        curve = plots.draw(run.dir, "curve.png", [[top], *rows], logs, width=7,
+                           heights=[3.2] + [1.6] * len(rows), dpi=90)
+    else:  # the rows alone, their axes closer side by side (also inside.png's)
+        curve = plots.draw(run.dir, "curve.png", rows, logs, width=10, wspace=0.3, dpi=90)
     rows = list(pictures.get("inside", []))
     if maps is not None:
         rows.append([plots.maps_row(maps)])
@@ -57,8 +61,23 @@ def draw_pictures(run, pictures, top, maps=None):
                            for key in ("value", "policy")}, true_value=maps["true"]["value"],
                      **{k: maps[k] for k in ("x", "y", "xlabel", "ylabel", "policy_label",
                                              "true_x", "true_y", "visited")})
-    inside = plots.draw(run.dir, "inside.png", rows, logs) if rows else None
+    inside = (plots.draw(run.dir, "inside.png", rows, logs, wspace=0.7 if top else 0.3)
+              if rows else None)
     return curve, inside
+
+
+def draw_logged(run, pictures):
+    """After the training of a script without an env, a Ctrl-C too: curve.png and inside.png
+    of what was logged (draw_pictures, --curves) and its TensorBoard scalars (--tensorboard);
+    nothing before the first logged row."""
+    if not (run.dir / "progress.csv").exists():
+        return
+    if run.cfg.tensorboard:
+        plots.to_tensorboard(run.dir, tags=run.tags)
+    if run.cfg.curves:
+        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+            curve, inside = draw_pictures(run, pictures)
+            print(f"curve: {curve}\ninside: {inside}", flush=True)
 
 
 def finish_updates(run, threshold, play, before, pictures, maps=None):

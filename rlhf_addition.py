@@ -460,39 +460,25 @@ def train(cfg: Config):
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
-    elif cfg.curves:
-        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            draw(run.dir, r_w - shift, r_l - shift)
+    else:
+        report.draw_logged(run, pictures(r_w - shift, r_l - shift))
     return dict(result, interrupted=run.interrupted)
 
 
-def draw(run_dir, r_w, r_l):
+def pictures(r_w, r_l):
     """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
     r_w, r_l of the held-out pairs' chosen and rejected answers, and the over-optimisation
     picture: learned reward and true score of PPO's samples against their KL to pi_ref."""
-    log = np.genfromtxt(run_dir / "progress.csv", delimiter=",", names=True, dtype=None,
-                        encoding="utf-8")  # a record array: phase is text, the rest numbers
-    plt, phase, ppo = plots.pyplot(), log["phase"], log["phase"] == "ppo"
-    fig, axes = plt.subplots(1, 4, figsize=(15, 3.5))
-    for ax, name in zip(axes, ("sft", "rm", "ppo", "dpo")):
-        for key in ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy"):
-            keep = (phase == name) & np.isfinite(log[key])
-            if keep.any():
-                ax.plot(log["global_step"][keep], log[key][keep], lw=1, ms=3, label=key,
-                        marker="o" if key.startswith("held") else None)
-        ax.set(title=name, xlabel="step")
-        ax.legend(fontsize=7)
-    print(f"curve: {plots.save_whole(plt, fig, run_dir / 'curve.png', dpi=80)}", flush=True)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
-    for scores, label in ((r_w, "chosen (higher true score)"), (r_l, "rejected")):
-        left.hist(scores.numpy(), bins=40, alpha=0.6, label=label)
-    left.set(title="reward model on held-out pairs", xlabel="r(x, y)")
-    for key in ("rm_score", "true_score"):
-        right.plot(np.sqrt(np.maximum(log["kl"][ppo], 0)), log[key][ppo], ".-", ms=3, label=key)
-    right.set(title="PPO's answers against their KL to the supervised model",
-              xlabel="sqrt(KL(pi || pi_ref)), per answer")
-    left.legend(fontsize=7), right.legend(fontsize=7)
-    print(f"inside: {plots.save_whole(plt, fig, run_dir / 'inside.png', dpi=80)}", flush=True)
+    numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
+    stages = [plots.lines(*numbers, title=name, where=("phase", name), xlabel="step")
+              for name in ("sft", "rm", "ppo", "dpo")]
+    return dict(curve=[stages[:2], stages[2:]], inside=[[
+        plots.distributions({"chosen (higher true score)": r_w.numpy(), "rejected": r_l.numpy()},
+                            "reward model on held-out pairs", "r(x, y)"),
+        plots.lines("rm_score", "true_score", where=("phase", "ppo"), x="kl",
+                    x_of=lambda kl: np.sqrt(np.maximum(kl, 0)),
+                    title="PPO's answers against their KL to the supervised model",
+                    xlabel="sqrt(KL(pi || pi_ref)), per answer")]])
 
 
 def main(argv=None):

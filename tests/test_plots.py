@@ -238,3 +238,138 @@ def test_compare_legend_counts_every_run_drawn(tmp_path):
     fig = plots.compare_figure(sorted(tmp_path.iterdir()))
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert labels == ["ddpg_walker: 2 runs"], labels
+
+
+# ---- the panels of the language-model scripts: a stage per axis, text, histograms ----------
+
+def drawn(panel, logs):
+    """Fill a panel's axes from `logs` as plots.draw does; returns its axes."""
+    import plots
+
+    n, fill = panel
+    fig, axes = plots.pyplot().subplots(1, n, squeeze=False)
+    fill(list(axes[0]), logs)
+    return list(axes[0])
+
+
+def stage_logs():
+    """Ten rows in two stages: loss at every row, score only in stage b, pass1 at some rows
+    of b, kl (for the x axis) at every row."""
+    nan = np.nan
+    table = dict(global_step=np.arange(1.0, 11.0), phase=np.array(["a"] * 4 + ["b"] * 6),
+                 loss=np.arange(10.0) / 10, score=np.array([nan] * 4 + [1, 2, 3, 4, 5, 6.0]),
+                 pass1=np.array([nan] * 5 + [0.5, nan, 0.6, nan, 0.7]),
+                 kl=np.array([0, 1, 4, 9, 16, 25, 36, 49, 64, 81.0]))
+    return dict(table=table, kept=[], labels=dict(loss="the loss", score="the score"))
+
+
+@pytest.mark.quick
+def test_read_csv_keeps_a_text_column_as_text(tmp_path):
+    """progress.csv with a stage's name in a column: the names, as strings; the numbers, nan
+    where empty."""
+    import plots
+
+    (tmp_path / "progress.csv").write_text("global_step,phase,loss\n1,sft,0.5\n2,rm,\n")
+    table = plots.read_csv(tmp_path / "progress.csv")
+    assert table["phase"].tolist() == ["sft", "rm"]
+    assert table["global_step"].tolist() == [1.0, 2.0] and table["loss"][0] == 0.5
+    assert np.isnan(table["loss"][1])
+
+
+@pytest.mark.quick
+def test_lines_draws_only_the_rows_of_a_stage():
+    """where=("phase", "a"): the rows of stage a only, and a column not measured there (score)
+    left out, legend included; within=(3, 6): steps 3 to 6, both ends drawn; a column
+    measured at some of those rows only (pass1): those rows, as points."""
+    import plots
+
+    (ax,) = drawn(plots.lines("loss", "score", where=("phase", "a")), stage_logs())
+    assert [line.get_xdata().tolist() for line in ax.lines] == [[1, 2, 3, 4]]
+    assert ax.lines[0].get_ydata().tolist() == [0.0, 0.1, 0.2, 0.3]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["the loss"]
+    (ax,) = drawn(plots.lines("score", "pass1", within=(3, 6)), stage_logs())
+    score, pass1 = ax.lines
+    assert score.get_xdata().tolist() == [5, 6] and score.get_ydata().tolist() == [1, 2]
+    assert pass1.get_xdata().tolist() == [6] and pass1.get_marker() == "o"
+    (ax,) = drawn(plots.lines("score", where=("phase", "b"), within=(1, 7)), stage_logs())
+    assert ax.lines[0].get_xdata().tolist() == [5, 6, 7]  # both: the rows of b up to step 7
+
+
+@pytest.mark.quick
+def test_lines_against_another_column():
+    """x="kl", x_of=np.sqrt: each row of stage b a point at (sqrt(kl), score), in the log's
+    order, and the x label as given."""
+    import plots
+
+    (ax,) = drawn(plots.lines("score", where=("phase", "b"), x="kl", x_of=np.sqrt,
+                              xlabel="sqrt(kl)"), stage_logs())
+    assert ax.lines[0].get_xdata().tolist() == [4, 5, 6, 7, 8, 9]
+    assert ax.lines[0].get_ydata().tolist() == [1, 2, 3, 4, 5, 6]
+    assert ax.get_xlabel() == "sqrt(kl)"
+
+
+@pytest.mark.quick
+def test_histograms_of_the_updates_that_keep_the_array():
+    """Kept arrays from a stage without a ratio (steps 1, 3) and four updates with one: the
+    first, middle and last of those four, numbered among them, every value counted, the band
+    dashed; no split by sign."""
+    import plots
+
+    rng = np.random.default_rng(0)
+    ratios = {step: 1 + 0.05 * rng.standard_normal(100 + step) for step in (5, 6, 7, 8)}
+    kept = [(1, {}), (3, {})] + [(step, {"ratio": r}) for step, r in ratios.items()]
+    axes = drawn(plots.histograms("ratio", band=(0.8, 1.2)), dict(kept=kept, labels={}))
+    assert [ax.get_title() for ax in axes] == ["ratio at update 1 (step 5)",
+                                               "ratio at update 3 (step 7)",
+                                               "ratio at update 4 (step 8)"]
+    for ax, step in zip(axes, (5, 7, 8)):
+        (outline,) = ax.patches  # stepfilled: one polygon, the outline of the bars
+        corners = outline.get_xy()[1:80]  # (left edge, count), (right edge, count), ...
+        counts, edges = np.histogram(ratios[step], bins=40)  # bins over the values
+        np.testing.assert_array_equal(corners[::2, 1], counts)
+        np.testing.assert_allclose(corners[::2, 0], edges[:-1])
+        assert counts.sum() == len(ratios[step])
+        assert [line.get_xdata()[0] for line in ax.lines] == [0.8, 1.2]
+    none = drawn(plots.histograms("ratio", band=(0.8, 1.2)), dict(kept=kept[:2], labels={}))
+    assert all(not ax.patches for ax in none)  # a run stopped before any: blank, no error
+
+
+@pytest.mark.quick
+def test_distributions_count_each_array_over_the_same_bins():
+    """Two arrays: one histogram each, labelled, their bars on the same bin edges, every
+    value counted once."""
+    import plots
+
+    a, b = np.linspace(0, 1, 50), np.linspace(0.5, 3, 30)
+    (ax,) = drawn(plots.distributions({"chosen": a, "rejected": b}, "scores", "r"),
+                  dict(kept=[], labels={}))
+    assert [len(c.patches) for c in ax.containers] == [40, 40]
+    left = [[p.get_x() for p in c.patches] for c in ax.containers]
+    assert left[0] == left[1]  # the same bins: the two can be compared bar by bar
+    assert [sum(p.get_height() for p in c.patches) for c in ax.containers] == [50, 30]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["chosen", "rejected"]
+    assert ax.get_title() == "scores" and ax.get_xlabel() == "r"
+
+
+@pytest.mark.quick
+def test_text_shows_every_line_in_order():
+    import plots
+
+    lines = ["1+2= 03. 04.x", "5+5= 10. 11.x", "9+9= 18. 18."]
+    (ax,) = drawn(plots.text(lines, "answers"), dict(kept=[], labels={}))
+    assert [t.get_text() for t in ax.texts] == ["1+2= 03. 04.x\n5+5= 10. 11.x\n9+9= 18. 18."]
+    assert ax.get_title() == "answers" and not ax.axison
+
+
+def test_tensorboard_leaves_out_a_text_column(tmp_path):
+    """A stage's name is text: no scalar of it, the numbers beside it written."""
+    pytest.importorskip("tensorboard")
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+    import plots
+
+    (tmp_path / "progress.csv").write_text("global_step,phase,loss\n1,sft,0.5\n2,rm,0.25\n")
+    plots.to_tensorboard(tmp_path)
+    events = EventAccumulator(str(tmp_path))
+    events.Reload()
+    assert events.Tags()["scalars"] == ["charts/loss"]
+    assert [(e.step, e.value) for e in events.Scalars("charts/loss")] == [(1, 0.5), (2, 0.25)]
