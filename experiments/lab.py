@@ -261,13 +261,20 @@ def report(name, curves, folder, solved=475.0, what="mean return of the last 20 
     ax.legend(fontsize=7, loc="lower right")
     for (column, label, log), (ax,) in zip(panels, axes[1:]):
         for color, (variant, runs) in enumerate(curves.items()):
-            band(ax, [kept[column] for _, _, kept in runs], color)
+            band(ax, [measured(*kept[column]) for _, _, kept in runs], color)
         ax.set_ylabel(label, fontsize=8)
         if log:
             ax.set_yscale("log")
     axes[-1, 0].set_xlabel("env steps")
     fig.tight_layout()
     return plots.save_whole(plt, fig, folder / f"{name}.png", dpi=80)
+
+
+def measured(steps, values):
+    """The steps where a column was measured (a column logged at some rows only is nan at the
+    others)."""
+    ok = np.isfinite(values)
+    return steps[ok], values[ok]
 
 
 def steps_median_and_range(hits):

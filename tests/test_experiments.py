@@ -22,6 +22,8 @@ import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
 import sac_temperature  # noqa: E402
+import double_dqn  # noqa: E402
+import dqn_target_period  # noqa: E402
 import target_networks  # noqa: E402
 import td3_fixes  # noqa: E402
 import truncation_as_termination  # noqa: E402
@@ -29,7 +31,7 @@ import truncation_as_termination_ddpg  # noqa: E402
 
 EXPERIMENTS = ("truncation_as_termination", "autoreset_not_masked", "advantage_normalization",
                "gae_lambda", "critic_output_shape", "truncation_as_termination_ddpg",
-               "clip_or_penalty", "target_networks")
+               "clip_or_penalty", "target_networks", "double_dqn", "dqn_target_period")
 
 
 def rollout(truncate_at=None):
@@ -498,3 +500,34 @@ def test_sac_temperature_variants_are_only_the_alpha_flag():
     assert [v.get("config", {}) for v in sac_temperature.VARIANTS.values()] == [
         {}, {"alpha": 0.2}]
     assert not any("swap" in v for v in sac_temperature.VARIANTS.values())
+
+
+def test_dqn_variants_are_only_the_double_flag_and_the_target_period():
+    """double_dqn: the default against --double; dqn_target_period: --target-update-interval
+    16, the default (64) and 512; nothing else, no swapped code."""
+    import dqn_cartpole
+
+    assert dqn_cartpole.Config().double is False
+    assert dqn_cartpole.Config().target_update_interval == 64
+    assert [v.get("config", {}) for v in double_dqn.VARIANTS.values()] == [{}, {"double": True}]
+    assert [v.get("config", {}) for v in dqn_target_period.VARIANTS.values()] == [
+        {"target_update_interval": 16}, {}, {"target_update_interval": 512}]
+    assert not any("swap" in v for v in [*double_dqn.VARIANTS.values(),
+                                         *dqn_target_period.VARIANTS.values()])
+
+
+def test_double_dqn_writes_each_check_of_q_against_the_return_and_its_gap(tmp_path, capsys):
+    """Only the phases where Q was checked (the others are nan in progress.csv) make a row."""
+    steps = np.array([256.0, 512.0, 768.0])
+    one = (steps, np.array([10.0, 20.0, 30.0]),
+           {"q_greedy": (steps, np.array([np.nan, 50.0, 90.0])),
+            "mc_return": (steps, np.array([np.nan, 40.0, 95.0]))})
+    curves = {name: [one] for name in double_dqn.VARIANTS}
+    (table,) = double_dqn.more(curves, tmp_path, {})
+    import csv
+
+    rows = list(csv.reader(table.read_text().splitlines()))
+    default = "original: DQN, max_a Q'(s', a) (the default)"
+    assert rows[1:3] == [[default, "0", "512", "50", "40", "10"],
+                         [default, "0", "768", "90", "95", "-5"]]
+    assert len(rows) == 5 and "+2.50 [+2.50, +2.50]" in capsys.readouterr().out  # median(10, -5)
