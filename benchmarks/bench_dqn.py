@@ -17,6 +17,7 @@ there is skipped, so the benchmark resumes where it stopped.
     pip install -r benchmarks/requirements.txt     # adds stable-baselines3
     python benchmarks/bench_dqn.py                 # seeds 0-4
     python benchmarks/bench_dqn.py --table         # the table of the CSV (docs/results.md's)
+    python benchmarks/bench_dqn.py --held-out      # ours on seeds 5-9 (defaults chosen on 0-4)
 """
 
 import argparse
@@ -137,15 +138,23 @@ def table(rows):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, default=5, help="seeds 0 .. N-1")
+    parser.add_argument("--held-out", action="store_true",
+                        help="ours alone on seeds 5-9, which no default was chosen on "
+                             "(dqn_heldout_seeds.csv)")
     parser.add_argument("--timeout", type=float, default=900, help="seconds before a run is killed")
     parser.add_argument("--table", action="store_true", help="only the table of the CSV")
     args = parser.parse_args()
+    global OUT, RUNNERS
+    if args.held_out:  # the defaults were chosen on seeds 0-4: these five test them
+        OUT = OUT.with_name("dqn_heldout_seeds.csv")
+        RUNNERS = {"dqn_cartpole": RUNNERS["dqn_cartpole"]}
+    seeds = range(5, 10) if args.held_out else range(args.seeds)
     if not args.table:
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, cwd=ROOT).stdout.strip()
         done = {(r["seed"], r["runner"]) for r in read_rows()}
         OUT.parent.mkdir(parents=True, exist_ok=True)
-        for seed in range(args.seeds):
+        for seed in seeds:
             for name, cmd in RUNNERS.items():
                 if (str(seed), name) in done:
                     continue
