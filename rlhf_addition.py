@@ -105,7 +105,7 @@ class Config(cli.OutputFlags):
     # --- PPO ---
     reward_from: str = "model"
     """'model': PPO's reward is the reward model's score (RLHF); 'judge': the hidden score
-    itself, as a verifier would give it (what a perfect reward model would do)"""
+    itself on r's scale, as a verifier would give it (what a perfect reward model would do)"""
     ppo_steps: int = 50
     """PPO updates, each on a fresh batch of prompts"""
     ppo_prompts: int = 256
@@ -128,8 +128,8 @@ class Config(cli.OutputFlags):
     lam: float = 0.95
     """GAE lambda over the tokens (Ziegler et al.: 0.95)"""
     value_from_rm: bool = True
-    """start the value network from the reward model (InstructGPT); --no-value-from-rm: from
-    the supervised model with a fresh head"""
+    """start the value network from the reward model (InstructGPT); --no-value-from-rm (and
+    --reward-from judge): from the supervised model with a zero head"""
     # --- DPO ---
     dpo: bool = True
     """after PPO, train a copy of the supervised model by DPO on the same pairs"""
@@ -397,7 +397,8 @@ def train(cfg: Config):
         start = time.time()
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
-        chosen, rejected, _ = preference_pairs(seqs, scores_of(seqs, cfg.digits), K, cfg.flip, rng)
+        judged = scores_of(seqs, cfg.digits)  # the supervised answers, judged
+        chosen, rejected, _ = preference_pairs(seqs, judged, K, cfg.flip, rng)
         test = sample(reference, prompt_ids(held_out, cfg.digits).repeat_interleave(K, 0), L, gen)
         test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
 
@@ -410,17 +411,28 @@ def train(cfg: Config):
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
             result["rm_accuracy"] = (r_w > r_l).float().mean().item()
-            # shift r so that the supervised model's answers score 0 on average (InstructGPT)
-            shift = sequence_score(rm, seqs, P).mean()
+            # shift r so that the supervised model's answers score 0 on average (Ziegler et al.
+            # 2019 sec. 2.2, who also scale it to variance 1 there: not done, so beta weighs
+            # the KL against r's own spread, printed below; InstructGPT: demonstrations at 0)
+            r_sft = sequence_score(rm, seqs, P)
+            shift = r_sft.mean()
             rm.head.bias -= shift
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
         print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
-              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs (took "
+              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs; on the supervised "
+              f"model's answers r has std {r_sft.std():.2f}, the judge {judged.std():.3f} (took "
               f"{time.time() - start:.0f} s)", flush=True)
 
         # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
-        value_net = nets["value"] = (copy.deepcopy(rm) if cfg.value_from_rm  # V starts as r
+        # --reward-from judge, the control, changes only which answers are paid more: the
+        # judge's score is put on r's scale (mean 0, r's std on the supervised answers), so that
+        # beta weighs the KL alike; V cannot start from a judge, so it starts from the
+        # supervised model with a zero head, V = 0: right on average, as r's copy is
+        judge = cfg.reward_from == "judge"
+        value_net = nets["value"] = (copy.deepcopy(rm) if cfg.value_from_rm and not judge
                                      else with_scalar_head(reference, cfg.d_model)).requires_grad_()
+        if judge or not cfg.value_from_rm:
+            torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
         opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                       lr=cfg.learning_rate), time.time()
         for step in range(1, cfg.ppo_steps + 1):
@@ -431,7 +443,7 @@ def train(cfg: Config):
             with torch.no_grad():
                 logp_old, logp_ref = token_logp(policy, seqs, P), token_logp(reference, seqs, P)
                 learned = sequence_score(rm, seqs, P)  # r(x, y), logged in either case
-                score = learned if cfg.reward_from == "model" else truth
+                score = (truth - judged.mean()) / judged.std() * r_sft.std() if judge else learned
                 values = value_net(seqs[:, :-1]).squeeze(-1)[:, P - 1:] * mask  # V(s_t), (B, L)
                 rewards, kl = per_token_rewards(score, logp_old, logp_ref, mask, cfg.beta)
                 adv, ret = token_advantages(rewards, values, mask, cfg.gamma, cfg.lam)

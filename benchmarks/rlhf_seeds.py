@@ -45,8 +45,12 @@ FIGURE = ROOT / "docs" / "rlhf_overoptimisation.png"
 # (seed, name, flags): the default run, seed 0 with a tight KL penalty, and with the judge's
 # own score as PPO's reward (a verifier: what a perfect reward model would give)
 RUNS = [(0, "default", []), (0, "beta 1", ["--beta", "1"]), (1, "default", []),
-        (2, "default", []), (0, "judge", ["--reward-from", "judge"]), (3, "default", []),
-        (4, "default", [])]
+        (2, "default", []), (3, "default", []), (4, "default", [])]
+# --judge: the control, PPO on the judge's score (on r's scale; V from the supervised model
+# with a zero head), seeds 0-4, no DPO (it does not depend on PPO's reward); a row of
+# rlhf_judge.csv per seed, with r's and the judge's std on the supervised model's answers
+JUDGE = ROOT / "benchmarks" / "results" / "rlhf_judge.csv"
+JUDGE_RUNS = [(seed, "judge", ["--reward-from", "judge", "--no-dpo"]) for seed in range(5)]
 STAGE = re.compile(r"^(supervised|PPO|DPO): held-out true score ([\d.]+), accuracy ([\d.]+) "
                    r"\(took (\d+) s\)")
 
@@ -66,6 +70,8 @@ def one(seed, name, flags, tmp):
                         f"{stage}_seconds": m.group(4)})
         if m := re.search(r"held-out pair accuracy ([\d.]+).*took (\d+) s", line):
             row.update(rm_pair_accuracy=m.group(1), rm_seconds=m.group(2))
+        if m := re.search(r"r has std ([\d.]+), the judge ([\d.]+)", line):
+            row.update(r_std=m.group(1), judge_std=m.group(2))
     row["seconds"] = f"{time.time() - start:.0f}"
     (run,) = [d for d in Path(tmp).iterdir() if f"seed{seed}_" in d.name]
     ppo = [r for r in csv.DictReader(open(run / "progress.csv")) if r["phase"] == "ppo"]
@@ -236,13 +242,14 @@ def main():
                 append(GRPO, [row])
                 print(row, flush=True)
         return
-    done = {(r["seed"], r["run"]) for r in csv.DictReader(open(OUT))} if OUT.exists() else set()
+    out, runs = (JUDGE, JUDGE_RUNS) if "--judge" in sys.argv else (OUT, RUNS)
+    done = {(r["seed"], r["run"]) for r in csv.DictReader(open(out))} if out.exists() else set()
     with tempfile.TemporaryDirectory() as tmp:
-        for seed, name, flags in RUNS:
+        for seed, name, flags in runs:
             if (str(seed), name) in done:  # a record row per run, kept: run again to go on
                 continue
             row, curve = one(seed, name, flags, tmp)
-            append(OUT, [row])
+            append(out, [row])
             append(CURVES, curve)
             print(row, flush=True)
 
