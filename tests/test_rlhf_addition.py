@@ -129,8 +129,7 @@ def test_a_tiny_run_in_process(tmp_path):
 
 
 SHORT = ["--sft-steps", 600, "--pair-prompts", 300, "--ppo-steps", 25, "--eval-prompts", 200,
-         "--dpo-epochs", 1, "--reward-from", "judge", "--learning-rate", 5e-5,
-         "--no-value-from-rm"]
+         "--dpo-epochs", 1, "--reward-from", "judge", "--learning-rate", 5e-5]
 
 
 @pytest.mark.slow
