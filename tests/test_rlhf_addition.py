@@ -128,6 +128,29 @@ def test_a_tiny_run_in_process(tmp_path):
     assert 0 <= result["rm_accuracy"] <= 1 and (result["run_dir"] / "model.pt").exists()
 
 
+@pytest.mark.quick
+def test_the_judge_control_starts_its_critic_at_zero_and_prints_the_scales(tmp_path, capsys):
+    """--reward-from judge changes the reward, not the critic's footing: V starts from the
+    supervised model with a zero head (V = 0, the mean of the judge put on r's scale), where
+    RLHF's V starts as the reward model; both runs print r's and the judge's spread."""
+    import checkpoints
+
+    saved = {}
+    for reward_from in ("judge", "model"):
+        rlhf.train(rlhf.Config(**{**TINY, "ppo_steps": 0}, dpo=False, reward_from=reward_from,
+                               curves=False, run_dir=str(tmp_path / reward_from)))
+        saved[reward_from] = checkpoints.load_checkpoint(tmp_path / reward_from / next(
+            (tmp_path / reward_from).iterdir()).name, script="rlhf_addition")
+        assert re.search(r"r has std [\d.]+, the judge [\d.]+", capsys.readouterr().out)
+    judge, model = saved["judge"], saved["model"]
+    assert not judge["value"]["head.weight"].any() and not judge["value"]["head.bias"].any()
+    for name, weight in judge["policy"].items():  # no PPO step: the policy is pi_ref
+        if not name.startswith("head."):
+            assert torch.equal(judge["value"][name], weight), name
+    for name, weight in model["reward_model"].items():
+        assert torch.equal(model["value"][name], weight), name
+
+
 SHORT = ["--sft-steps", 600, "--pair-prompts", 300, "--ppo-steps", 25, "--eval-prompts", 200,
          "--dpo-epochs", 1, "--reward-from", "judge", "--learning-rate", 5e-5]
 
