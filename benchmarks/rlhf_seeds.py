@@ -153,29 +153,35 @@ def append(path, rows):
         writer.writerows(rows)
 
 
-def summary(path=OUT, grpo_path=GRPO):
+def summary(path=OUT, grpo_path=GRPO, judge_path=JUDGE):
     """The page's table, from the records: per stage, the held-out true score and accuracy of
-    the default runs and of GRPO beside them (--grpo), median [lowest, highest] over their
-    seeds; the paired differences, seed by seed; and the seeds."""
+    the default runs, of the judge control (--judge) and of GRPO beside them (--grpo), median
+    [lowest, highest] over their seeds; the paired differences, seed by seed; r's std on the
+    supervised model's answers; and the seeds."""
     import statistics
 
     rows = sorted((r for r in csv.DictReader(open(path)) if r["run"] == "default"),
                   key=lambda r: int(r["seed"]))
     grpo = {r["seed"]: r for r in csv.DictReader(open(grpo_path))}
-    for r in rows:  # GRPO's columns beside each seed's RLHF run (the same supervised model)
+    judge = {r["seed"]: r for r in csv.DictReader(open(judge_path))}
+    for r in rows:  # GRPO's and the control's columns beside each seed's RLHF run
         r.update({k: v for k, v in grpo.get(r["seed"], {}).items() if k.startswith("grpo_")})
+        r.update({k.replace("ppo_", "judge_"): v for k, v in judge.get(r["seed"], {}).items()
+                  if k.startswith("ppo_")}, r_std=judge.get(r["seed"], {}).get("r_std"))
 
     def cell(values, sign=""):  # median [lowest, highest]
         low, mid, high = min(values), statistics.median(values), max(values)
         return f"{mid:{sign}.3f} [{low:{sign}.3f}, {high:{sign}.3f}]"
 
     cells = [[cell([float(r[f"{stage}_{k}"]) for r in rows]) for k in ("true", "accuracy")]
-             for stage in ("supervised", "ppo", "dpo", "grpo")]
-    for stage, base in (("ppo", "supervised"), ("dpo", "supervised"), ("grpo", "supervised"),
+             for stage in ("supervised", "ppo", "judge", "dpo", "grpo")]
+    for stage, base in (("ppo", "supervised"), ("judge", "supervised"), ("judge", "ppo"),
+                        ("dpo", "supervised"), ("grpo", "supervised"),
                         ("grpo", "ppo")):  # paired: each seed's stage minus its own base
         cells.append([cell([float(r[f"{stage}_{k}"]) - float(r[f"{base}_{k}"]) for r in rows],
                            "+") for k in ("true", "accuracy")])
     cells.append([cell([float(r["rm_pair_accuracy"]) for r in rows])])
+    cells.append([cell([float(r["r_std"]) for r in rows])])
     return cells, [int(r["seed"]) for r in rows]
 
 
