@@ -158,9 +158,10 @@ SHORT = ["--sft-steps", 600, "--pair-prompts", 300, "--ppo-steps", 25, "--eval-p
 @pytest.mark.slow
 def test_a_short_run_raises_the_true_score(tmp_path):
     """Seed 0, a shorter supervised phase, PPO on the judge's own score (a verifier; against
-    the learned reward the true score can fall, docs/ppo_to_rlhf.md), a larger step and a
-    fresh value head (this short run's reward model is at chance, no start for a critic):
-    PPO's samples score higher at the end than at the start; the saved models answer --eval."""
+    the learned reward the true score can fall, docs/ppo_to_rlhf.md; its critic starts from
+    the supervised model at zero, this short run's reward model being at chance) and a larger
+    step: PPO's samples score higher at the end than at the start; the saved models answer
+    --eval."""
     p = run_script("rlhf_addition.py", *SHORT, "--run-dir", tmp_path, timeout=300)
     assert p.returncode == 0, p.stderr
     (run,) = tmp_path.iterdir()
@@ -168,9 +169,9 @@ def test_a_short_run_raises_the_true_score(tmp_path):
                                               "inside.png"}
     rows = [r for r in csv.DictReader(open(run / "progress.csv")) if r["phase"] == "ppo"]
     first, last = (sum(float(r["true_score"]) for r in part) / 5 for part in (rows[:5], rows[-5:]))
-    assert last > first + 0.01, (first, last)  # seed 0: 0.856 -> 0.874
+    assert last > first + 0.01, (first, last)  # seed 0: 0.861 -> 0.896
     held = dict(re.findall(r"^(supervised|PPO): held-out true score ([\d.]+)", p.stdout, re.M))
-    assert float(held["PPO"]) > float(held["supervised"]) + 0.02, held  # seed 0: 0.854 -> 0.885
+    assert float(held["PPO"]) > float(held["supervised"]) + 0.02, held  # seed 0: 0.854 -> 0.901
     p = run_script("rlhf_addition.py", "--eval", run, timeout=120)
     assert p.returncode == 0, p.stderr
     assert "policy: held-out (200 prompts) true score" in p.stdout
