@@ -20,6 +20,7 @@ already there is skipped.
 
     nice -n 10 python benchmarks/rlhf_seeds.py           # about 5 minutes a run on 2 busy cores
     nice -n 10 python benchmarks/rlhf_seeds.py --grpo    # GRPO beside, seeds 0-4
+    nice -n 10 python benchmarks/rlhf_seeds.py --judge   # the control (PPO on the judge), 0-4
     python benchmarks/rlhf_seeds.py --plot               # the figure, from the records
     python benchmarks/rlhf_seeds.py --table              # the page's table, from the record
 """
