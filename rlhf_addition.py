@@ -2,21 +2,13 @@
 with a value head and a per-token KL penalty (Ziegler et al. 2019; Stiennon et al. 2020;
 Ouyang et al. 2022, "InstructGPT"), and DPO from the same pairs (Rafailov et al. 2023).
 
-Read after ppo_cartpole.py and grpo_addition.py: the same PPO (ratio, clip, GAE, value loss),
-now over the tokens of an answer, with a reward that a network learned from a judge's
-rankings instead of a program's check. docs/ppo_to_rlhf.md maps each line to its PPO line.
-The run, top to bottom:
-
-    supervise  the tiny transformer of grpo_addition.py on sums like "47+38=085.", 30% of
-               whose labels have the carry wrong (supervised data wrong sometimes)
-    rank       K answers of the supervised model to each prompt, ranked by a hidden judge
-               (the share of the answer's characters that are right); some pairs flipped,
-               as people's labels are. The policy never sees the judge's score
-    reward     a reward model (the transformer with a scalar head), Bradley-Terry loss
-    PPO        sample an answer per prompt; per-token reward -beta * (log pi_old - log pi_ref),
-               plus the reward model's score on the last token; GAE over the tokens; the
-               clipped surrogate and the value loss of ppo_cartpole.py
-    DPO        from the supervised model again, on the same pairs: no reward model, no sampling
+Read after ppo_cartpole.py and grpo_addition.py: the same PPO (ratio, clip, GAE, value loss)
+over an answer's tokens, its reward learned from a judge's rankings. The run: supervise
+grpo_addition.py's tiny transformer on sums ("47+38=085.", 30% of labels with the carry
+wrong); a hidden judge (the share of right characters) ranks K of its answers per prompt,
+some pairs flipped as people's are; a reward model (a scalar head) learns them (Bradley-Terry);
+PPO, per-token reward -beta * (log pi_old - log pi_ref) plus r on the last token, GAE over the
+tokens; DPO on the same pairs. Each line's PPO counterpart: docs/ppo_to_rlhf.md.
 
     python rlhf_addition.py                 # all stages (a few minutes on a CPU)
     python rlhf_addition.py --eval runs/latest    # answers of the saved PPO and DPO models
@@ -96,8 +88,8 @@ class Config(cli.OutputFlags):
     flip: float = 0.2
     """share of the pairs whose label is flipped (InstructGPT's labellers agreed ~73%)"""
     rm_epochs: int = 4
-    """passes of the reward model over the pairs (InstructGPT: 1; here the carry is learned
-    late: held-out pair accuracy about 0.6 after 2 passes, 0.9 after 4)"""
+    """passes over the pairs (InstructGPT: 1, a prompt's pairs together; here each pair
+    apart, and the carry is learned late: held-out pair accuracy ~0.6 after 2, 0.9 after 4)"""
     rm_batch: int = 64
     """pairs per reward-model (and DPO) step"""
     rm_lr: float = 1e-3
@@ -105,7 +97,7 @@ class Config(cli.OutputFlags):
     # --- PPO ---
     reward_from: str = "model"
     """'model': PPO's reward is the reward model's score (RLHF); 'judge': the hidden score
-    itself, as a verifier would give it (what a perfect reward model would do)"""
+    itself on r's scale, as a verifier would give it (what a perfect reward model would do)"""
     ppo_steps: int = 50
     """PPO updates, each on a fresh batch of prompts"""
     ppo_prompts: int = 256
@@ -119,17 +111,14 @@ class Config(cli.OutputFlags):
     clip_coef: float = 0.2
     """epsilon of the per-token clipped ratio, as in PPO-clip"""
     vf_coef: float = 0.5
-    """value loss weight c1 (PPO eq. 9)"""
+    """value loss weight c1 (PPO eq. 9); inert here: no shared weights, no gradient clip, Adam"""
     beta: float = 0.1
-    """weight of the per-token KL penalty to the supervised model (Stiennon et al.: 0.05;
-    InstructGPT: 0.02); 0 lets PPO go as far as the reward model pays it"""
+    """weight of the per-token KL penalty to pi_ref; 0 lets PPO go as far as r pays it. Not
+    comparable with Stiennon et al.'s 0.05 or InstructGPT's 0.02: r's scale differs (printed)"""
     gamma: float = 1.0
     """discount over the tokens of an answer (1: the reward at the end counts in full)"""
     lam: float = 0.95
     """GAE lambda over the tokens (Ziegler et al.: 0.95)"""
-    value_from_rm: bool = True
-    """start the value network from the reward model (InstructGPT); --no-value-from-rm: from
-    the supervised model with a fresh head"""
     # --- DPO ---
     dpo: bool = True
     """after PPO, train a copy of the supervised model by DPO on the same pairs"""
@@ -149,8 +138,7 @@ class Config(cli.OutputFlags):
 
     def __post_init__(self):
         cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
-                  "--cuda, --tensorboard are not for this script: no env to play, no GPU code, no "
-                  "TensorBoard logs (--eval prints the saved models' answers)")
+                  "--cuda, --tensorboard: no env to play, no GPU code, no TensorBoard logs here")
         super().__post_init__()
         cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", label_noise="[0, 1]",
@@ -353,12 +341,11 @@ def stage_done(result, name, model, held_out, cfg, start):
           f"{time.time() - start:.0f} s)", flush=True)
 
 
-# What each step logs, once: progress.csv's columns, (progress-line format or None, label)
 LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
               rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
               kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
               clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
-              held_accuracy=(".3f", "held-out accuracy"))
+              held_accuracy=(".3f", "held-out accuracy"))  # progress.csv: (line format, label)
 SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
              eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
 
@@ -397,7 +384,8 @@ def train(cfg: Config):
         start = time.time()
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
-        chosen, rejected, _ = preference_pairs(seqs, scores_of(seqs, cfg.digits), K, cfg.flip, rng)
+        judged = scores_of(seqs, cfg.digits)  # the supervised answers, judged
+        chosen, rejected, _ = preference_pairs(seqs, judged, K, cfg.flip, rng)
         test = sample(reference, prompt_ids(held_out, cfg.digits).repeat_interleave(K, 0), L, gen)
         test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
 
@@ -410,17 +398,26 @@ def train(cfg: Config):
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
             result["rm_accuracy"] = (r_w > r_l).float().mean().item()
-            # shift r so that the supervised model's answers score 0 on average (InstructGPT)
-            shift = sequence_score(rm, seqs, P).mean()
+            # shift r: the supervised model's answers score 0 on average (Ziegler et al. 2019,
+            # sec. 2, also scale r to variance 1 there: not done, beta weighs against r's std)
+            r_sft = sequence_score(rm, seqs, P)
+            shift = r_sft.mean()
             rm.head.bias -= shift
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
         print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
-              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs (took "
+              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs; on the supervised "
+              f"answers r has std {r_sft.std():.2f}, the judge {judged.std():.3f} (took "
               f"{time.time() - start:.0f} s)", flush=True)
 
         # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
-        value_net = nets["value"] = (copy.deepcopy(rm) if cfg.value_from_rm  # V starts as r
-                                     else with_scalar_head(reference, cfg.d_model)).requires_grad_()
+        # --reward-from judge, the control, changes only which answers pay more: the judge on
+        # r's scale (mean 0, r's std on the supervised answers), so beta weighs alike; V, with no
+        # judge to start from, from the supervised model with a zero head: 0, right on average
+        judge = cfg.reward_from == "judge"
+        value_net = nets["value"] = (with_scalar_head(reference, cfg.d_model) if judge
+                                     else copy.deepcopy(rm)).requires_grad_()  # InstructGPT
+        if judge:
+            torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
         opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                       lr=cfg.learning_rate), time.time()
         for step in range(1, cfg.ppo_steps + 1):
@@ -431,12 +428,12 @@ def train(cfg: Config):
             with torch.no_grad():
                 logp_old, logp_ref = token_logp(policy, seqs, P), token_logp(reference, seqs, P)
                 learned = sequence_score(rm, seqs, P)  # r(x, y), logged in either case
-                score = learned if cfg.reward_from == "model" else truth
+                score = (truth - judged.mean()) / judged.std() * r_sft.std() if judge else learned
                 values = value_net(seqs[:, :-1]).squeeze(-1)[:, P - 1:] * mask  # V(s_t), (B, L)
                 rewards, kl = per_token_rewards(score, logp_old, logp_ref, mask, cfg.beta)
                 adv, ret = token_advantages(rewards, values, mask, cfg.gamma, cfg.lam)
-                real = adv[mask > 0]
-                adv = (adv - real.mean()) / (real.std() + 1e-8) * mask  # ppo_cartpole's norm_adv
+                real = adv[mask > 0]  # norm_adv over the batch (ppo_cartpole.py: each minibatch)
+                adv = (adv - real.mean()) / (real.std() + 1e-8) * mask
             data = dict(seqs=seqs, logp=logp_old, adv=adv, ret=ret, mask=mask, P=P)
             loss_pi, loss_v, clipfrac = ppo_update(policy, value_net, opt, data, cfg, gen)
             log_row(run, held_out, cfg, "ppo", check=None if step % cfg.eval_every else policy,
@@ -449,8 +446,7 @@ def train(cfg: Config):
             dpo_policy, start = copy.deepcopy(reference).requires_grad_(True), time.time()
             nets["dpo"] = dpo_policy
             with torch.no_grad():  # log pi_ref(y|x) of every pair's answers, once
-                ref_w = answer_logp(reference, chosen, P)
-                ref_l = answer_logp(reference, rejected, P)
+                ref_w, ref_l = (answer_logp(reference, y, P) for y in (chosen, rejected))
             logged = lambda step, loss: log_row(run, held_out, cfg, "dpo", loss=loss.item(),  # noqa
                                                 check=None if step % cfg.eval_every else dpo_policy)
             fit_on_pairs(dpo_policy, lambda idx: dpo_loss(
@@ -458,6 +454,10 @@ def train(cfg: Config):
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
                 cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
+            with torch.no_grad():  # held-out pair accuracy, DPO's reward being log pi / pi_ref
+                w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
+                        for y in (test_w, test_l))
+            print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
     else:
@@ -495,14 +495,12 @@ def main(argv=None):
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
                 c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
             seqs = sample(model, prompt_ids(held_out[:6], c.digits).repeat_interleave(6, 0),
-                          c.digits + 2, gen)  # 6 answers to each of 6 held-out sums
-            scores = scores_of(seqs, c.digits).view(6, 6).tolist()
-            for row, score in zip(seqs.view(6, 6, -1).tolist(), scores):
-                print(f"{key:6} {decode(row[0][:P])} " + " ".join(
-                    f"{decode(s[P:])}({v:.2f})" for s, v in zip(row, score)))
-            score, accuracy = evaluate(model, held_out, c)
-            print(f"{key}: held-out ({len(held_out)} prompts) true score {score:.3f}, "
-                  f"accuracy {accuracy:.3f}  ((n): the judge's hidden score)", flush=True)
+                          c.digits + 2, gen).view(6, 6, -1)  # 6 answers to each of 6 sums
+            for row in seqs:
+                print(f"{key:6} {decode(row[0, :P].tolist())} " + " ".join(f"{decode(s[P:])}"
+                      f"({v:.2f})" for s, v in zip(row.tolist(), scores_of(row, c.digits))))
+            print(f"{key}: held-out ({len(held_out)} prompts) true score %.3f, accuracy %.3f  "
+                  "((n): the judge's hidden score)" % evaluate(model, held_out, c), flush=True)
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ already there is skipped.
 
     nice -n 10 python benchmarks/rlhf_seeds.py           # about 5 minutes a run on 2 busy cores
     nice -n 10 python benchmarks/rlhf_seeds.py --grpo    # GRPO beside, seeds 0-4
+    nice -n 10 python benchmarks/rlhf_seeds.py --judge   # the control (PPO on the judge), 0-4
     python benchmarks/rlhf_seeds.py --plot               # the figure, from the records
     python benchmarks/rlhf_seeds.py --table              # the page's table, from the record
 """
@@ -45,8 +46,12 @@ FIGURE = ROOT / "docs" / "rlhf_overoptimisation.png"
 # (seed, name, flags): the default run, seed 0 with a tight KL penalty, and with the judge's
 # own score as PPO's reward (a verifier: what a perfect reward model would give)
 RUNS = [(0, "default", []), (0, "beta 1", ["--beta", "1"]), (1, "default", []),
-        (2, "default", []), (0, "judge", ["--reward-from", "judge"]), (3, "default", []),
-        (4, "default", [])]
+        (2, "default", []), (3, "default", []), (4, "default", [])]
+# --judge: the control, PPO on the judge's score (on r's scale; V from the supervised model
+# with a zero head), seeds 0-4, no DPO (it does not depend on PPO's reward); a row of
+# rlhf_judge.csv per seed, with r's and the judge's std on the supervised model's answers
+JUDGE = ROOT / "benchmarks" / "results" / "rlhf_judge.csv"
+JUDGE_RUNS = [(seed, "judge", ["--reward-from", "judge", "--no-dpo"]) for seed in range(5)]
 STAGE = re.compile(r"^(supervised|PPO|DPO): held-out true score ([\d.]+), accuracy ([\d.]+) "
                    r"\(took (\d+) s\)")
 
@@ -66,6 +71,8 @@ def one(seed, name, flags, tmp):
                         f"{stage}_seconds": m.group(4)})
         if m := re.search(r"held-out pair accuracy ([\d.]+).*took (\d+) s", line):
             row.update(rm_pair_accuracy=m.group(1), rm_seconds=m.group(2))
+        if m := re.search(r"r has std ([\d.]+), the judge ([\d.]+)", line):
+            row.update(r_std=m.group(1), judge_std=m.group(2))
     row["seconds"] = f"{time.time() - start:.0f}"
     (run,) = [d for d in Path(tmp).iterdir() if f"seed{seed}_" in d.name]
     ppo = [r for r in csv.DictReader(open(run / "progress.csv")) if r["phase"] == "ppo"]
@@ -147,29 +154,35 @@ def append(path, rows):
         writer.writerows(rows)
 
 
-def summary(path=OUT, grpo_path=GRPO):
+def summary(path=OUT, grpo_path=GRPO, judge_path=JUDGE):
     """The page's table, from the records: per stage, the held-out true score and accuracy of
-    the default runs and of GRPO beside them (--grpo), median [lowest, highest] over their
-    seeds; the paired differences, seed by seed; and the seeds."""
+    the default runs, of the judge control (--judge) and of GRPO beside them (--grpo), median
+    [lowest, highest] over their seeds; the paired differences, seed by seed; r's std on the
+    supervised model's answers; and the seeds."""
     import statistics
 
     rows = sorted((r for r in csv.DictReader(open(path)) if r["run"] == "default"),
                   key=lambda r: int(r["seed"]))
     grpo = {r["seed"]: r for r in csv.DictReader(open(grpo_path))}
-    for r in rows:  # GRPO's columns beside each seed's RLHF run (the same supervised model)
+    judge = {r["seed"]: r for r in csv.DictReader(open(judge_path))}
+    for r in rows:  # GRPO's and the control's columns beside each seed's RLHF run
         r.update({k: v for k, v in grpo.get(r["seed"], {}).items() if k.startswith("grpo_")})
+        r.update({k.replace("ppo_", "judge_"): v for k, v in judge.get(r["seed"], {}).items()
+                  if k.startswith("ppo_")}, r_std=judge.get(r["seed"], {}).get("r_std"))
 
     def cell(values, sign=""):  # median [lowest, highest]
         low, mid, high = min(values), statistics.median(values), max(values)
         return f"{mid:{sign}.3f} [{low:{sign}.3f}, {high:{sign}.3f}]"
 
     cells = [[cell([float(r[f"{stage}_{k}"]) for r in rows]) for k in ("true", "accuracy")]
-             for stage in ("supervised", "ppo", "dpo", "grpo")]
-    for stage, base in (("ppo", "supervised"), ("dpo", "supervised"), ("grpo", "supervised"),
+             for stage in ("supervised", "ppo", "judge", "dpo", "grpo")]
+    for stage, base in (("ppo", "supervised"), ("judge", "supervised"), ("judge", "ppo"),
+                        ("dpo", "supervised"), ("grpo", "supervised"),
                         ("grpo", "ppo")):  # paired: each seed's stage minus its own base
         cells.append([cell([float(r[f"{stage}_{k}"]) - float(r[f"{base}_{k}"]) for r in rows],
                            "+") for k in ("true", "accuracy")])
     cells.append([cell([float(r["rm_pair_accuracy"]) for r in rows])])
+    cells.append([cell([float(r["r_std"]) for r in rows])])
     return cells, [int(r["seed"]) for r in rows]
 
 
@@ -236,13 +249,14 @@ def main():
                 append(GRPO, [row])
                 print(row, flush=True)
         return
-    done = {(r["seed"], r["run"]) for r in csv.DictReader(open(OUT))} if OUT.exists() else set()
+    out, runs = (JUDGE, JUDGE_RUNS) if "--judge" in sys.argv else (OUT, RUNS)
+    done = {(r["seed"], r["run"]) for r in csv.DictReader(open(out))} if out.exists() else set()
     with tempfile.TemporaryDirectory() as tmp:
-        for seed, name, flags in RUNS:
+        for seed, name, flags in runs:
             if (str(seed), name) in done:  # a record row per run, kept: run again to go on
                 continue
             row, curve = one(seed, name, flags, tmp)
-            append(OUT, [row])
+            append(out, [row])
             append(CURVES, curve)
             print(row, flush=True)
 
