@@ -310,6 +310,35 @@ def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
             after_step(step, loss)
 
 
+def shift_to_zero(rm, seqs, P):
+    """Shift r so that the supervised model's answers `seqs` score 0 on average (Ziegler et
+    al. 2019, sec. 2; they also scale r to variance 1: not here, so beta weighs against r's
+    std). Returns r on those answers before the shift, and the shift."""
+    with torch.no_grad():
+        r_sft = sequence_score(rm, seqs, P)
+        rm.head.bias -= r_sft.mean()
+    return r_sft, r_sft.mean()
+
+
+def critic_start(cfg, reference, rm):
+    """V for PPO: a copy of the reward model (InstructGPT, Ouyang et al. 2022, sec. 3.5). For
+    --reward-from judge, the control, with no judge network to copy: the supervised model with
+    a zero head, V = 0, right on average on its answers (r is shifted to mean 0 there)."""
+    if cfg.reward_from != "judge":
+        return copy.deepcopy(rm).requires_grad_()
+    value_net = with_scalar_head(reference, cfg.d_model).requires_grad_()
+    torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
+    return value_net
+
+
+def implicit_reward_accuracy(dpo_policy, reference, y_w, y_l, P):
+    """DPO's held-out pair accuracy: how often its implicit reward, log pi(y|x) - log
+    pi_ref(y|x) (Rafailov et al. 2023, sec. 5), ranks y_w above y_l."""
+    with torch.no_grad():
+        w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P) for y in (y_w, y_l))
+    return (w > l).float().mean().item()
+
+
 def ppo_update(policy, value_net, opt, data, cfg, gen):
     """update_epochs passes of shuffled minibatches of answers over one batch `data`, as in
     ppo_cartpole.py's ppo_update. Returns the last minibatch's (loss_pi, loss_v, clipfrac)."""
@@ -398,11 +427,7 @@ def train(cfg: Config):
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
             result["rm_accuracy"] = (r_w > r_l).float().mean().item()
-            # shift r: the supervised model's answers score 0 on average (Ziegler et al. 2019,
-            # sec. 2, also scale r to variance 1 there: not done, beta weighs against r's std)
-            r_sft = sequence_score(rm, seqs, P)
-            shift = r_sft.mean()
-            rm.head.bias -= shift
+        r_sft, shift = shift_to_zero(rm, seqs, P)  # the supervised answers' r: 0 on average
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
         print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
               f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs; on the supervised "
@@ -411,13 +436,9 @@ def train(cfg: Config):
 
         # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
         # --reward-from judge, the control, changes only which answers pay more: the judge on
-        # r's scale (mean 0, r's std on the supervised answers), so beta weighs alike; V, with no
-        # judge to start from, from the supervised model with a zero head: 0, right on average
+        # r's scale (mean 0, r's std on the supervised answers), so beta weighs alike
         judge = cfg.reward_from == "judge"
-        value_net = nets["value"] = (with_scalar_head(reference, cfg.d_model) if judge
-                                     else copy.deepcopy(rm)).requires_grad_()  # InstructGPT
-        if judge:
-            torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
+        value_net = nets["value"] = critic_start(cfg, reference, rm)
         opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                       lr=cfg.learning_rate), time.time()
         for step in range(1, cfg.ppo_steps + 1):
@@ -454,10 +475,8 @@ def train(cfg: Config):
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
                 cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
-            with torch.no_grad():  # held-out pair accuracy, DPO's reward being log pi / pi_ref
-                w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
-                        for y in (test_w, test_l))
-            print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
+            print("DPO's implicit reward: held-out pair accuracy "
+                  f"{implicit_reward_accuracy(dpo_policy, reference, test_w, test_l, P):.3f}")
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
     else:
