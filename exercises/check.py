@@ -15,7 +15,7 @@ the script itself has no branch and no flag for it. Messages in Chinese or Engli
 else the locale. Exit status 0 only when every stage run passed.
 
 检查练习，分三关：(a) 手算的例子（损失函数还比较梯度）；(b) 把你的函数换进脚本自己的 train()，
-和原版逐次更新比较日志；(c) 用你的函数把任务学会。--lang zh 显示中文（默认跟随系统的语言设置）。
+和原版逐次更新比较日志；(c) 用你的函数把任务学会。--lang zh 显示中文（不写时看系统语言）。
 """
 
 import argparse
