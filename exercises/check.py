@@ -195,7 +195,7 @@ def kl_cases():
 def beta_cases():
     cfg = SimpleNamespace(d_targ=0.01, kl_tolerance=1.5, beta_factor=2.0)
     return [(tr(f"beta = 1, d = {d:g} (d_targ = 0.01, tolerance 1.5, factor 2)",
-                f"beta = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, cfg),
+                f"β = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, cfg),
              expected) for d, expected in ((0.001, 0.5), (0.02, 2.0), (0.01, 1.0),
                                            (0.01 / 1.5, 1.0), (0.01 * 1.5, 1.0))]
 
@@ -329,7 +329,7 @@ def grpo_cases():
         args = (logp, logp_old, logp_ref, adv, mask, cfg)
         cases.append((tr(f"2 completions of 3 tokens, the first's third masked; eps = 0.2, "
                          f"beta = 0.1, length_norm = {norm}",
-                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.2，beta = 0.1，"
+                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.2，β = 0.1，"
                          f"length_norm = {norm}"), args,
                       (grpo_by_hand(*(a.detach() if torch.is_tensor(a) else a for a in args)),
                        None)))
@@ -339,7 +339,7 @@ def grpo_cases():
 def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
     args = [a.detach() if torch.is_tensor(a) else a for a in (logp, logp_old, logp_ref, adv, mask)]
     return [(tr("k3 the other way round: pi / pi_ref where k3 of KL(pi || pi_ref) has pi_ref / pi",
-                "k3 的方向反了：用了 pi / pi_ref，KL(pi || pi_ref) 的 k3 用 pi_ref / pi"),
+                "k3 的方向反了：用了 π / π_ref，KL(π || π_ref) 的 k3 用 π_ref / π"),
              grpo_by_hand(*args, cfg, kl_reversed=True)),
             (tr("the mask not applied: the padding after the first \".\" counted",
                 "没有乘掩码：第一个 \".\" 之后的填充也算进去了"),
@@ -357,13 +357,13 @@ def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
                 "own tokens first", "对整个批量的所有 token 求了一个均值，应该先在每个回答自己的 token "
                 "上平均"), grpo_by_hand(*args, cfg, token_mean=True)),
             (tr("the KL penalty's sign: + beta * D where the objective subtracts it",
-                "KL 惩罚的符号反了：目标函数里应该减去 beta * D"),
+                "KL 惩罚的符号反了：目标函数里应该减去 β * D"),
              grpo_by_hand(*args, cfg, kl_sign=-1.0)),
             (tr("no clip: r * A alone, without min(.., clip(r) A)",
                 "没有裁剪：只用了 r * A，没有 min(.., clip(r) A)"),
              grpo_by_hand(*args, cfg, no_clip=True)),
             (tr("the ratio against logp itself (always 1): pi_old is logp_old",
-                "比值的分母用了 logp 自己（比值总是 1）：pi_old 是 logp_old"),
+                "比值的分母用了 logp 自己（比值总是 1）：π_old 是 logp_old"),
              grpo_by_hand(*args, cfg, ratio_one=True)),
             (tr("the sign: the objective returned, where the loss is its negative",
                 "符号反了：返回的是目标函数，损失应该取负"), -grpo_by_hand(*args, cfg))]
@@ -733,7 +733,7 @@ def td3_cases():
     # min(Q1', Q2') at a~: rows (3 + d, 4 + 2d), (5 + d, 2 + 2d), (1 + d, 1 + 2d), d = (a~ - mu')^2
     return [
         (tr("sigma = 0 (no smoothing): Q1' = (3, 5, 1), Q2' = (4, 2, 1), the third terminated: "
-            "y = 1 + 0.5 * min", "sigma = 0（不平滑）：Q1' = (3, 5, 1)，Q2' = (4, 2, 1)，第三个终止："
+            "y = 1 + 0.5 * min", "σ = 0（不平滑）：Q1' = (3, 5, 1)，Q2' = (4, 2, 1)，第三个终止："
             "y = 1 + 0.5 * min"), (0.0, 0.5, [-3.0], [3.0]), t(2.5, 2.0, 1.0),
          [(tr("max where clipped double Q takes the smaller", "取了较大的，裁剪双 Q 要取较小的"),
            t(3.0, 3.5, 1.0)),
@@ -752,17 +752,17 @@ def td3_cases():
               "(here mu(s') = mu'(s') + 1)", "用了正在训练的当前演员 nets[\"actor\"]，应该用目标演员 "
               "mu'（这里 mu(s') = mu'(s') + 1）"), t(3.0, 3.0, 1.0))]),
         (tr("sigma = 10000, c = 0.5, half_width = 2: eps always clipped, |a~ - mu'(s')| = 1",
-            "sigma = 10000，c = 0.5，half_width = 2：噪声总被裁剪，|a~ - mu'(s')| = 1"),
+            "σ = 10000，c = 0.5，half_width = 2：噪声总被裁剪，|a~ - mu'(s')| = 1"),
          (1e4, 0.5, [-3.0], [3.0]), t(3.0, 3.0, 1.0),
          [(tr("eps not scaled by half_width (or clipped after the scaling): |a~ - mu'| = 0.5",
               "噪声没有乘 half_width（或者乘了之后才裁剪）：|a~ - mu'| = 0.5"), t(2.625, 2.25, 1.0)),
           (tr("the noise not clipped to [-c, c]: with sigma = 10000, a~ lands on the action "
-              "box's edge, |a~ - mu'| = 3", "噪声没有裁剪到 [-c, c]：sigma = 10000 时，a~ 落在动作范围的"
+              "box's edge, |a~ - mu'| = 3", "噪声没有裁剪到 [-c, c]：σ = 10000 时，a~ 落在动作范围的"
               "边上，|a~ - mu'| = 3"), t(7.0, 8.0, 1.0))]),
         (tr("sigma = 0.3, c = 10, the box [-100, 100] (noise neither clipped nor boxed), "
             "torch.manual_seed(0) before the call:\n  one draw eps = torch.randn_like(action), "
             "both critics at the same a~",
-            "sigma = 0.3，c = 10，动作范围 [-100, 100]（噪声既不被裁剪也不被限制），调用前 "
+            "σ = 0.3，c = 10，动作范围 [-100, 100]（噪声既不被裁剪也不被限制），调用前 "
             "torch.manual_seed(0)：\n  只抽一次 eps = torch.randn_like(action)，两个评论员在同一个 a~ "
             "上取值"), (0.3, 10.0, [-100.0], [100.0]), "noise",
          [(tr("two noise draws, one per critic: both critics must be evaluated at the same a~",
@@ -807,7 +807,7 @@ def check_td3_target(fn):
                      if torch.allclose(y1, value, atol=1e-4)] if y1 is not None else []
             if y1 is not None and (y1 - expected).abs().max() > 100:  # sigma = 10000 here
                 named = [tr("the noise not clipped to [-c, c] (sigma is 10000 in this case)",
-                            "噪声没有裁剪到 [-c, c]（这个例子里 sigma 是 10000）")]
+                            "噪声没有裁剪到 [-c, c]（这个例子里 σ 是 10000）")]
             raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
                 "\n  this is exactly what this mistake gives: ",
                 "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None
@@ -992,7 +992,7 @@ def ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset, stored_trunc
         if got.all() and not valid[t].all():
             return tr("the autoreset step not masked: the reset step's ignored action and 0 "
                       "reward would train pi (valid = ~autoreset)", "没有掩掉自动重置步：重置步"
-                      "被忽略的动作和 0 奖励会拿去训练 pi（valid = ~autoreset）")
+                      "被忽略的动作和 0 奖励会拿去训练 π（valid = ~autoreset）")
         if np.array_equal(got, autoreset):
             return tr("valid = autoreset: the mask says where the reset steps are, valid where "
                       "the rows train (valid = ~autoreset)", "valid = autoreset：掩码标的是重置步"
@@ -1279,7 +1279,7 @@ def sac_variant(actor, obs, alpha, correction="exact", q_at="a", logp_of="u", re
 def sac_value_mistakes():
     return [
         (tr("no tanh correction: log pi is the Gaussian's log density of u alone",
-            "没有 tanh 的修正：log pi 只用了 u 的高斯对数密度"), dict(correction="none")),
+            "没有 tanh 的修正：log π 只用了 u 的高斯对数密度"), dict(correction="none")),
         (tr("the correction's sign flipped: + log(scale * (1 - tanh(u)^2)), where the change of "
             "variables subtracts it", "修正项的符号反了：变量替换要减去 log(scale * (1 - tanh(u)^2))，"
             "不是加上"), dict(correction="flipped")),
@@ -1305,12 +1305,12 @@ def sac_value_mistakes():
         (tr("the Gaussian's log density taken at the squashed action a, not at u",
             "高斯的对数密度在压缩后的动作 a 处取值，应该在 u 处"), dict(logp_of="a")),
         (tr("log pi averaged over the action's dimensions, not summed (the density of a vector is "
-            "the product of its dimensions')", "log pi 对动作的各维求了平均，应该求和（向量的密度是"
+            "the product of its dimensions')", "log π 对动作的各维求了平均，应该求和（向量的密度是"
             "各维密度的乘积）"), dict(reduce="mean")),
         (tr("max(Q1, Q2) where SAC takes the smaller", "取了 max(Q1, Q2)，SAC 取较小的"),
          dict(critics="max")),
         (tr("the entropy term's sign: the loss is alpha * log pi - Q (a lower log pi, more "
-            "entropy, lowers it)", "熵那一项的符号反了：损失是 alpha * log pi - Q（log pi 越小、熵越大，损失越小）"),
+            "entropy, lowers it)", "熵那一项的符号反了：损失是 alpha * log π - Q（log π 越小、熵越大，损失越小）"),
          dict(entropy=-1.0))]
 
 
@@ -1320,7 +1320,7 @@ def sac_gradient_mistakes():
             "(the reparameterisation lost)", "u 用 sample() 抽取，不是 rsample()：梯度穿不过采样"
             "（丢了重参数化）"), dict(draw="sample")),
         (tr("log pi detached in the loss: the entropy term no longer trains the actor",
-            "损失里的 log pi 被 detach 了：熵那一项不再训练演员"), dict(detach_logp=True)),
+            "损失里的 log π 被 detach 了：熵那一项不再训练演员"), dict(detach_logp=True)),
         (tr("the action detached before the critics: Q's gradient no longer reaches the actor",
             "动作在送进评论员之前被 detach 了：Q 的梯度传不到演员"), dict(detach_a=True))]
 
@@ -1328,7 +1328,7 @@ def sac_gradient_mistakes():
 def sac_cases():
     return [
         (tr("scale 1, two action dimensions: u = mean + sigma * eps = (0.5, -1) and (1, 2)",
-            "scale 1，两维动作：u = mean + sigma * eps = (0.5, -1) 和 (1, 2)"),
+            "scale 1，两维动作：u = mean + σ * eps = (0.5, -1) 和 (1, 2)"),
          sac_case([[0.5, -1.0], [0.0, 1.0]], [[0.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [1.0, 1.0]],
                   [-1.0, -1.0], [1.0, 1.0])),
         (tr("the action box [-1, 3] x [-2, 2]: scale (2, 2), bias (1, 0); u as above",
@@ -1368,7 +1368,7 @@ def check_sac_actor_loss(fn):
         inputs = tr(f"\n  input: mean={rounded(mean)}, sigma={rounded(log_std.exp())}, "
                     f"eps={rounded(eps)}, scale={rounded(scale)}, bias={rounded(bias)}, alpha=0.5;"
                     f" Q1 = s_0 + sum(a), Q2 = s_1 + 2 sum(a), s = {rounded(obs)}",
-                    f"\n  输入：mean={rounded(mean)}，sigma={rounded(log_std.exp())}，"
+                    f"\n  输入：mean={rounded(mean)}，σ={rounded(log_std.exp())}，"
                     f"eps={rounded(eps)}，scale={rounded(scale)}，bias={rounded(bias)}，alpha=0.5；"
                     f"Q1 = s_0 + sum(a)，Q2 = s_1 + 2 sum(a)，s = {rounded(obs)}")
         named = ""
@@ -1705,7 +1705,7 @@ def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=Fal
 def clip_mistakes(policy, data, eps):
     right = surrogate(policy, data, eps)
     return [(tr("the ratio upside down: pi_old / pi, exp(logp_old - logp)",
-                "比值倒过来了：pi_old / pi，即 exp(logp_old - logp)"),
+                "比值倒过来了：π_old / π，即 exp(logp_old - logp)"),
              surrogate(policy, data, eps, inverted=True)),
             (tr("max where the pessimistic bound takes min", "用了 max，悲观的下界要取 min"),
              surrogate(policy, data, eps, use_max=True)),
@@ -1740,12 +1740,12 @@ def kl_mistakes(policy, data, beta):
     s, kl, reverse = (r * data["adv"]).mean(), kl_divergence(old, dist).mean(), kl_divergence(
         dist, old).mean()
     return [(tr("the KL the other way round: KL(pi || pi_old); kl_divergence(p, q) is KL(p || q)",
-                "KL 的方向反了：写成了 KL(pi || pi_old)；kl_divergence(p, q) 是 KL(p || q)"),
+                "KL 的方向反了：写成了 KL(π || π_old)；kl_divergence(p, q) 是 KL(p || q)"),
              -s + beta * reverse),
             (tr("the surrogate's sign: +mean(r A) where the loss has -mean(r A)",
                 "代理目标的符号反了：损失里应该是 -mean(r A)"), s + beta * kl),
             (tr("the penalty's sign: - beta * KL where the loss adds it",
-                "惩罚项的符号反了：损失里应该加上 beta * KL"), -s - beta * kl),
+                "惩罚项的符号反了：损失里应该加上 β * KL"), -s - beta * kl),
             (tr("a sample estimate of the KL, mean(logp_old - logp), where the exact KL of the two "
                 "distributions belongs (kl_divergence)", "用了 KL 的样本估计 mean(logp_old - logp)，"
                 "应该用两个分布的精确 KL（kl_divergence）"),
@@ -1770,7 +1770,7 @@ def a2c_mistakes(model, data, cfg):
                 "评论员的损失没有乘 0.5（应该是 0.5 * mean((V - R)^2)）"),
              loss_pi + cfg.vf_coef * 2 * loss_v - cfg.ent_coef * ent),
             (tr("the actor's sign: +mean(log pi * A) (the loss is minus it)",
-                "演员项的符号反了：损失应该是 -mean(log pi * A)"),
+                "演员项的符号反了：损失应该是 -mean(log π * A)"),
              -loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * ent)]
 
 
@@ -1798,7 +1798,7 @@ def actor_mistakes(actor, critic, obs):
 def beta_mistakes(beta, d, cfg):
     lo, hi = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance
     return [(tr("the two rules swapped: beta must shrink when d is small, grow when it is large",
-                "两条规则反了：d 小时 beta 应该变小，d 大时变大"),
+                "两条规则反了：d 小时 β 应该变小，d 大时变大"),
              beta * cfg.beta_factor if d < lo else beta / cfg.beta_factor if d > hi else beta),
             (tr("the tolerance (1.5) used as the factor (2)", "把容差（1.5）当成了倍数（2）"),
              beta / cfg.kl_tolerance if d < lo else beta * cfg.kl_tolerance if d > hi else beta),
@@ -2104,7 +2104,7 @@ EXERCISES = {ex.name: ex for ex in (
              outputs=("loss_pi", "entropy", "info"), mistakes=kl_mistakes),
     exercise("adapt_beta", "ppo_kl_cartpole", "adapt_beta", "ppo_kl_cartpole", beta_cases,
              dict(CARTPOLE_LOOP, total_timesteps=2560), CARTPOLE_LEARN,
-             lambda: tr("Each update's beta comes from your rule.", "每次更新的 beta 都来自你的规则。"),
+             lambda: tr("Each update's beta comes from your rule.", "每次更新的 β 都来自你的规则。"),
              outputs=("beta",), mistakes=beta_mistakes),
     exercise("a2c_loss", "actor_critic_cartpole", "a2c_loss", "actor_critic_cartpole",
              a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN, ON_REAL_DATA,
@@ -2174,7 +2174,7 @@ EXERCISES = {ex.name: ex for ex in (
              outputs=("stats",)),
     exercise("sac_actor_loss", "sac_walker", "compute_loss_actor", "sac_walker", lambda: [],
              SAC_LOOP, SAC_LEARN, lambda: tr("The actor descends your loss, and alpha follows "
-                                            "your log pi. ", "演员沿你的损失下降，alpha 跟着你的 log pi 调整。")
+                                            "your log pi. ", "演员沿你的损失下降，alpha 跟着你的 log π 调整。")
              + OFF_POLICY(), outputs=("actor_loss", "logp")),
 )}
 
