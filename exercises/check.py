@@ -2110,11 +2110,22 @@ EXERCISES = {ex.name: ex for ex in (
              a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN, ON_REAL_DATA,
              outputs=("loss", "stats"), mistakes=a2c_mistakes),
     exercise("td_target", "ddpg_walker", "td_target", "ddpg_walker", td_cases, DDPG_LOOP,
-             DDPG_LEARN, lambda: tr("The critic is trained toward your targets. ",
-                                    "评论员朝你的目标训练。") + OFF_POLICY(), outputs=("y",),
+             DDPG_LEARN, lambda: tr(
+                 "The critic is trained toward your targets: critic_loss differs first, at the "
+                 "first step where your y\n  differs; actor_loss follows, through the critic.",
+                 "评论员朝你的目标训练：critic_loss 最先不同，就在你的 y 第一次不同的那一步；"
+                 "\n  actor_loss 随后也不同，因为它经过评论员。"), outputs=("y",),
              mistakes=td_mistakes),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
-             DDPG_LOOP, DDPG_LEARN, OFF_POLICY, outputs=("actor_loss",), mistakes=actor_mistakes,
+             DDPG_LOOP, DDPG_LEARN, lambda: tr(
+                 "The actor descends your loss: actor_loss differs at the first step where its "
+                 "value differs; where only\n  its gradient differs, critic_loss differs "
+                 "first, a step later: its target Q'(s', mu'(s')) uses the\n  actor's target "
+                 "network, which follows the actor.",
+                 "演员沿你的损失下降：损失的数值不同时，actor_loss 在第一个不同的步就不同；只有梯度"
+                 "不同时，\n  critic_loss 会晚一步先不同：它的目标 Q'(s', mu'(s')) 用到目标演员，"
+                 "而目标演员跟着演员走。"),
+             outputs=("actor_loss",), mistakes=actor_mistakes,
              cut=lambda: tr("the action computed without a gradient: torch.no_grad() or "
                             ".detach() around actor(obs) cuts the actor off\n    (Q(s, mu(s)) "
                             "must reach mu(s): only the critic's parameters stay out of the step)",
