@@ -2032,7 +2032,7 @@ DDPG_LEARN = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=20_000, print_every=1
 TD3_LOOP, TD3_LEARN = DDPG_LOOP, dict(DDPG_LEARN, total_timesteps=30_000)
 # GRPO: a short supervised phase, then a few GRPO steps (the loop); the default run (learning).
 # One-digit sums, so that after 60 supervised steps some groups already mix right and wrong
-# answers (seed 0: 4 of 8 to 5 of 8 groups in each of the 4 steps): with every reward 0, every
+# answers (seed 0: 3 to 5 of the 8 groups in each of the 4 steps): with every reward 0, every
 # advantage and KL would be 0, and (b) could not tell answers apart (real_loop checks it)
 GRPO_LOOP = dict(seed=0, digits=1, sft_steps=60, grpo_steps=4, prompts=8, eval_every=20,
                  eval_prompts=20, curves=False, print_every=10**6)
