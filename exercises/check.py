@@ -293,7 +293,7 @@ def group_eps_mistake(fn):
 
 def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no_mask=False,
                  token_mean=False, kl_sign=1.0, no_clip=False, ratio_one=False,
-                 kl_unmasked=False, always_norm=False):
+                 kl_unmasked=False, always_norm=False, k1=False, all_mean=False):
     """The loss element by element, in plain Python (and the named mistakes' versions)."""
     eps, per_completion, total, tokens = cfg.clip_coef, [], 0.0, 0.0
     for i in range(len(adv)):
@@ -304,13 +304,15 @@ def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no
             s = r * a if no_clip else min(r * a, min(max(r, 1 - eps), 1 + eps) * a)
             x = float(logp[i, j] - logp_ref[i, j]) if kl_reversed else float(
                 logp_ref[i, j] - logp[i, j])
-            d = math.exp(x) - x - 1
+            d = -x if k1 else math.exp(x) - x - 1
             m = 1.0 if no_mask else float(mask[i, j])
             row += s * m - kl_sign * cfg.beta * d * (1.0 if kl_unmasked else m)
             tokens += float(mask[i, j])
         total += row
         n = float(mask[i].sum()) if cfg.length_norm or always_norm else logp.shape[1]
         per_completion.append(row / n)
+    if all_mean:  # one mean over every (B, L) entry, the padding's zeros counted
+        return scalar(-total / logp.numel())
     return scalar(-total / tokens if token_mean else -sum(per_completion) / len(adv))
 
 
@@ -348,6 +350,12 @@ def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
                 "the mask covers both terms)", "KL 项没有乘掩码：填充的 token 也付了 KL 惩罚（应该是 "
                 "(surrogate - β * D) * mask：掩码管两项）"),
              grpo_by_hand(*args, cfg, kl_unmasked=True)),
+            (tr("k1, log(pi / pi_ref), where this loss uses k3, pi_ref / pi - log(pi_ref / pi) - 1 "
+                "(never negative)", "用了 k1，即 log(π / π_ref)；这个损失用的是 k3，即 "
+                "π_ref / π - log(π_ref / π) - 1（永远不为负）"), grpo_by_hand(*args, cfg, k1=True)),
+            (tr("one mean over all (B, L) entries, the padding's zeros counted: each completion "
+                "is averaged over its own tokens first", "对全部 (B, L) 个位置求了一个均值，把填充的 0 "
+                "也算进去了：应该先在每个回答自己的 token 上平均"), grpo_by_hand(*args, cfg, all_mean=True)),
             (tr("length_norm ignored: each completion divided by its own length where "
                 "length_norm = False divides by the longest possible one (L, the same for all)",
                 "忽略了 length_norm：length_norm = False 时应该除以最长可能的长度 L（大家都一样），"

@@ -686,7 +686,11 @@ WRONG["grpo_loss"] += [
                  "per_token = surrogate * mask - cfg.beta * kl"), "(a)",
      "the KL term not masked: padding tokens pay a KL"),
     (script_with("grpo_loss", "length = mask.sum(1) if cfg.length_norm else",
-                 "length = mask.sum(1) if True else"), "(a)", "length_norm ignored")]
+                 "length = mask.sum(1) if True else"), "(a)", "length_norm ignored"),
+    (script_with("grpo_loss", "kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1",
+                 "kl = -log_ref_ratio"), "(a)", "k1, log(pi / pi_ref), where this loss uses k3"),
+    (script_with("grpo_loss", "loss = -(per_token.sum(1) / length).mean()",
+                 "loss = -per_token.mean()"), "(a)", "one mean over all (B, L) entries")]
 WRONG["actor_loss"] += [
     ("""def compute_loss_actor(actor, critic, obs):
                 with torch.no_grad():
