@@ -1510,8 +1510,8 @@ def compare_gradients(ex, fn, args):
     if reference is None:
         return
     cut = ("" if not getattr(ex, "cut", None) else
-           tr("\n  this is exactly what this mistake gives: ",
-              "\n  你的值恰好是这个常见错误会得到的值：\n    ") + ex.cut())
+           tr("\n  this is exactly what this mistake does: ",
+              "\n  这正是这个常见错误的表现：\n    ") + ex.cut())
     if yours is None:
         raise Failed(tr(
             "gradient cut: your loss has the right value and carries no gradient at all (it was "
