@@ -713,6 +713,10 @@ WRONG["clipped_surrogate"] += [
     (script_with("clipped_surrogate", "loss_pi = -torch.min(ratio * adv, clip_adv).mean()",
                  "loss_pi = -(torch.min(ratio, torch.clamp(ratio, 1 - clip_coef, 1 + clip_coef)) * adv).mean()"),
      "(a)", "the min taken over the ratios")]
+WRONG["grpo_loss"] += [  # the right value, the wrong gradient: no mistake's value may name it
+    (script_with("grpo_loss", "kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1",
+                 "kl = (torch.exp(log_ref_ratio) - log_ref_ratio - 1).detach()"), "(a)",
+     "wrong gradient: the value is right")]
 WRONG["kl_penalty"] += [
     (script_with("kl_penalty", 'dist).mean()', 'dist).sum()'), "(a)",
      "the KL summed over the batch (.sum())")]
@@ -1036,3 +1040,13 @@ def test_the_loop_notes_name_the_exercise_and_the_gae_message_fits_the_loops():
         check.flags([True, True], [False, False]), 0.5, 1.0)]
     assert any("they coincide with values[t + 1] in this project's" in x for x in labels), labels
     assert not any("is the next episode's first state, not" in x for x in labels), labels
+
+
+def test_a_mistake_that_gives_the_right_value_names_nothing():
+    """A wrong gradient with the right value (the k3 term detached) is not named after a
+    mistake whose value, in that case, is the right one (length_norm ignored, where
+    length_norm = True)."""
+    source = WRONG["grpo_loss"][-1][0]
+    passed, lines = run("grpo_loss", compile_answer(source, "grpo_loss"))
+    assert not passed and "wrong gradient" in lines[-1], lines
+    assert "this is exactly what this mistake" not in lines[-1], lines[-1]
