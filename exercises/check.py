@@ -15,7 +15,7 @@ the script itself has no branch and no flag for it. Messages in Chinese or Engli
 else the locale. Exit status 0 only when every stage run passed.
 
 检查练习，分三关：(a) 手算的例子（损失函数还比较梯度）；(b) 把你的函数换进脚本自己的 train()，
-和原版逐次更新比较日志；(c) 用你的函数把任务学会。--lang zh 显示中文（默认跟随系统的语言设置）。
+和原版逐次更新比较日志；(c) 用你的函数把任务学会。--lang zh 显示中文（不写时看系统语言）。
 """
 
 import argparse
@@ -96,7 +96,10 @@ class Fixed(torch.nn.Module):
             self.register_parameter(f"out{i}", p)
 
     def forward(self, obs):
-        return self.outputs[0] if len(self.outputs) == 1 else tuple(self.outputs)
+        # o * 1, not o: a new tensor from the graph, as a network's output is, so that an
+        # output computed under torch.no_grad() carries no gradient here either
+        out = [o * 1 for o in self.outputs]
+        return out[0] if len(out) == 1 else tuple(out)
 
 
 def returns_cases():
@@ -147,10 +150,10 @@ def gae_cases():
         (tr("env 1 truncated at t = 0, env 0 not: each column on its own",
             "t = 0 处环境 1 时间截断，环境 0 没有：每一列各算各的"),
          (r, v, nv, no, env1, 0.5, 1.0), t([1.5, 1.0], [1.0, 1.0])),
-        (tr("truncated at t = 0, V(final obs) = next_values[0] = 6, not values[1] = 2 (the next "
-            "episode's first state): delta_0 = 1 + 0.5 * 6 - 1 = 3",
-            "t = 0 处时间截断，V(最后的观测) = next_values[0] = 6，不是 values[1] = 2（下一个回合"
-            "的第一个状态）：delta_0 = 1 + 0.5 * 6 - 1 = 3"),
+        (tr("truncated at t = 0, V(final obs) = next_values[0] = 6, here not values[1] = 2 "
+            "(next_values is the input to use): delta_0 = 1 + 0.5 * 6 - 1 = 3",
+            "t = 0 处时间截断，V(最后的观测) = next_values[0] = 6，这里不等于 values[1] = 2"
+            "（要用的是输入 next_values）：delta_0 = 1 + 0.5 * 6 - 1 = 3"),
          (r, v, t([6.0, 6.0], [4.0, 4.0]), no, at0, 0.5, 1.0), t([3.0, 3.0], [1.0, 1.0])),
     ]
 
@@ -192,7 +195,7 @@ def kl_cases():
 def beta_cases():
     cfg = SimpleNamespace(d_targ=0.01, kl_tolerance=1.5, beta_factor=2.0)
     return [(tr(f"beta = 1, d = {d:g} (d_targ = 0.01, tolerance 1.5, factor 2)",
-                f"beta = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, cfg),
+                f"β = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, cfg),
              expected) for d, expected in ((0.001, 0.5), (0.02, 2.0), (0.01, 1.0),
                                            (0.01 / 1.5, 1.0), (0.01 * 1.5, 1.0))]
 
@@ -265,14 +268,32 @@ def group_mistakes(rewards, G, scale):
              (lambda r: (r - r.mean(0, keepdim=True)) / (
                  r.std(0, keepdim=True) + 1e-4 if scale else 1))(rewards.view(G, -1)).reshape(-1)),
             (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"), adv(eps=0.0)),
+            (tr("the 1e-4 as a floor (std.clamp_min(1e-4)) where it is added (std + 1e-4)",
+                "把 1e-4 当成了下限（std.clamp_min(1e-4)），应该是加上去（std + 1e-4）"),
+             adv(eps=0.0)),
+            (tr("1e-8 added where this project adds 1e-4 (std + 1e-4)",
+                "加的是 1e-8，本项目加的是 1e-4（std + 1e-4）"), adv(eps=0.0)),
             (tr("scale ignored: divided by the std where scale = False asks for r - mean only",
                 "忽略了 scale：scale = False 时只减均值，不除以标准差"),
              (lambda r: ((r - r.mean(1, keepdim=True)) / (r.std(1, keepdim=True) + 1e-4)))(
                  rewards.view(-1, G)).reshape(-1))]
 
 
+def group_eps_mistake(fn):
+    """Which denominator `fn` uses, told apart on a group whose std (5e-6) is far below 1e-4:
+    the last advantage is 7.5e-6 / (5e-6 + 1e-4) = 0.0714 right, 0.075 clamped at 1e-4, 1.497
+    with 1e-8 added, 1.5 with nothing."""
+    try:
+        a = float(fn(t(0.0, 0.0, 0.0, 1e-5), 4, True)[3])
+    except Exception:  # noqa: BLE001  the first case's message stands alone
+        return None
+    return (2 if abs(a - 0.075) < 1e-3 else 3 if abs(a - 1.497) < 2e-3
+            else 1 if abs(a - 1.5) < 1e-3 or math.isnan(a) else None)
+
+
 def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no_mask=False,
-                 token_mean=False, kl_sign=1.0, no_clip=False, ratio_one=False):
+                 token_mean=False, kl_sign=1.0, no_clip=False, ratio_one=False,
+                 kl_unmasked=False, always_norm=False, k1=False, all_mean=False):
     """The loss element by element, in plain Python (and the named mistakes' versions)."""
     eps, per_completion, total, tokens = cfg.clip_coef, [], 0.0, 0.0
     for i in range(len(adv)):
@@ -283,22 +304,26 @@ def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no
             s = r * a if no_clip else min(r * a, min(max(r, 1 - eps), 1 + eps) * a)
             x = float(logp[i, j] - logp_ref[i, j]) if kl_reversed else float(
                 logp_ref[i, j] - logp[i, j])
-            d = math.exp(x) - x - 1
+            d = -x if k1 else math.exp(x) - x - 1
             m = 1.0 if no_mask else float(mask[i, j])
-            row += (s - kl_sign * cfg.beta * d) * m
+            row += s * m - kl_sign * cfg.beta * d * (1.0 if kl_unmasked else m)
             tokens += float(mask[i, j])
         total += row
-        n = float(mask[i].sum()) if cfg.length_norm else logp.shape[1]
+        n = float(mask[i].sum()) if cfg.length_norm or always_norm else logp.shape[1]
         per_completion.append(row / n)
+    if all_mean:  # one mean over every (B, L) entry, the padding's zeros counted
+        return scalar(-total / logp.numel())
     return scalar(-total / tokens if token_mean else -sum(per_completion) / len(adv))
 
 
 def grpo_cases():
     # Two completions of 3 tokens, the first with 2 of its own (its third is padding). Ratios
-    # 1.5, 0.9, 1.1 / 0.7, 1.05, 1.3 against A = 1.5, -0.5; pi_ref / pi of 2, 0.5, 1, ...
+    # 1.5, 0.9, 1.1 / 0.7, 1.05, 1.3 against A = 1.5, -0.5; pi_ref / pi of 2, 0.5, 0.76, ...
+    # (the padding token's pi_ref / pi is not 1: its KL term, and its gradient, are not 0, so
+    # a KL left unmasked shows)
     logp_old = torch.log(t([0.4, 0.5, 0.6], [0.5, 0.4, 0.3]))
     logp = (torch.log(t([0.6, 0.45, 0.66], [0.35, 0.42, 0.39]))).requires_grad_()
-    logp_ref = torch.log(t([0.3, 0.9, 0.66], [0.7, 0.21, 0.5]))
+    logp_ref = torch.log(t([0.3, 0.9, 0.5], [0.7, 0.21, 0.5]))
     adv, mask = t(1.5, -0.5), t([1.0, 1.0, 0.0], [1.0, 1.0, 1.0])
     cases = []
     for norm in (True, False):
@@ -306,7 +331,7 @@ def grpo_cases():
         args = (logp, logp_old, logp_ref, adv, mask, cfg)
         cases.append((tr(f"2 completions of 3 tokens, the first's third masked; eps = 0.2, "
                          f"beta = 0.1, length_norm = {norm}",
-                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.2，beta = 0.1，"
+                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.2，β = 0.1，"
                          f"length_norm = {norm}"), args,
                       (grpo_by_hand(*(a.detach() if torch.is_tensor(a) else a for a in args)),
                        None)))
@@ -316,22 +341,37 @@ def grpo_cases():
 def grpo_mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
     args = [a.detach() if torch.is_tensor(a) else a for a in (logp, logp_old, logp_ref, adv, mask)]
     return [(tr("k3 the other way round: pi / pi_ref where k3 of KL(pi || pi_ref) has pi_ref / pi",
-                "k3 的方向反了：用了 pi / pi_ref，KL(pi || pi_ref) 的 k3 用 pi_ref / pi"),
+                "k3 的方向反了：用了 π / π_ref，KL(π || π_ref) 的 k3 用 π_ref / π"),
              grpo_by_hand(*args, cfg, kl_reversed=True)),
             (tr("the mask not applied: the padding after the first \".\" counted",
                 "没有乘掩码：第一个 \".\" 之后的填充也算进去了"),
              grpo_by_hand(*args, cfg, no_mask=True)),
+            (tr("the KL term not masked: padding tokens pay a KL ((surrogate - beta * D) * mask: "
+                "the mask covers both terms)", "KL 项没有乘掩码：填充的 token 也付了 KL 惩罚（应该是 "
+                "(surrogate - β * D) * mask：掩码管两项）"),
+             grpo_by_hand(*args, cfg, kl_unmasked=True)),
+            (tr("k1, log(pi / pi_ref), where this loss uses k3, pi_ref / pi - log(pi_ref / pi) - 1 "
+                "(never negative)", "用了 k1，即 log(π / π_ref)；这个损失用的是 k3，即 "
+                "π_ref / π - log(π_ref / π) - 1（永远不为负）"), grpo_by_hand(*args, cfg, k1=True)),
+            (tr("one mean over all (B, L) entries, the padding's zeros counted: each completion "
+                "is averaged over its own tokens first", "对全部 (B, L) 个位置求了一个均值，把填充的 0 "
+                "也算进去了：应该先在每个回答自己的 token 上平均"), grpo_by_hand(*args, cfg, all_mean=True)),
+            (tr("length_norm ignored: each completion divided by its own length where "
+                "length_norm = False divides by the longest possible one (L, the same for all)",
+                "忽略了 length_norm：length_norm = False 时应该除以最长可能的长度 L（大家都一样），"
+                "而你除以了每个回答自己的长度"),
+             grpo_by_hand(*args, cfg, always_norm=True) if not cfg.length_norm else None),
             (tr("one mean over all the batch's tokens, where each completion is averaged over its "
                 "own tokens first", "对整个批量的所有 token 求了一个均值，应该先在每个回答自己的 token "
                 "上平均"), grpo_by_hand(*args, cfg, token_mean=True)),
             (tr("the KL penalty's sign: + beta * D where the objective subtracts it",
-                "KL 惩罚的符号反了：目标函数里应该减去 beta * D"),
+                "KL 惩罚的符号反了：目标函数里应该减去 β * D"),
              grpo_by_hand(*args, cfg, kl_sign=-1.0)),
             (tr("no clip: r * A alone, without min(.., clip(r) A)",
                 "没有裁剪：只用了 r * A，没有 min(.., clip(r) A)"),
              grpo_by_hand(*args, cfg, no_clip=True)),
             (tr("the ratio against logp itself (always 1): pi_old is logp_old",
-                "比值的分母用了 logp 自己（比值总是 1）：pi_old 是 logp_old"),
+                "比值的分母用了 logp 自己（比值总是 1）：π_old 是 logp_old"),
              grpo_by_hand(*args, cfg, ratio_one=True)),
             (tr("the sign: the objective returned, where the loss is its negative",
                 "符号反了：返回的是目标函数，损失应该取负"), -grpo_by_hand(*args, cfg))]
@@ -464,6 +504,29 @@ def ddpg_critic_mistakes(nets, batch, cfg):
                      next_obs, at(next_obs))))]
 
 
+def ddpg_update_keeping(nets, batch, cfg, kept):
+    """The script's update with one optimizer's zero_grad() left out (kept: "critic" or
+    "actor"): the gradients of the update before are added to this one's."""
+    ddpg = importlib.import_module("ddpg_walker")
+    actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets.values()
+    obs, action, reward, next_obs, not_done = batch
+    with torch.no_grad():
+        y = ddpg.td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)),
+                           cfg.gamma)
+    critic_loss = F.mse_loss(critic(obs, action), y)
+    if kept != "critic":
+        critic_opt.zero_grad()
+    critic_loss.backward()
+    critic_opt.step()
+    actor_loss = ddpg.compute_loss_actor(actor, critic, obs)
+    if kept != "actor":
+        actor_opt.zero_grad()
+    actor_loss.backward(inputs=list(actor.parameters()))
+    actor_opt.step()
+    ddpg.soft_update(critic_target, critic, cfg.tau)
+    ddpg.soft_update(actor_target, actor, cfg.tau)
+
+
 def gap(p, q):
     return float((p - q).detach().abs().max())
 
@@ -504,6 +567,13 @@ def check_ddpg_update(fn):
              ("actor_target", tr("the actor's target after the soft update",
                                  "软更新之后的目标演员"))]
     swapped_steps = ""
+    if any(torch.is_tensor(x) and x.requires_grad for x in got):
+        raise Failed(case + tr(
+            "the losses returned with their graph: return critic_loss.detach(), "
+            "actor_loss.detach() (the loop only logs them;\n  a graph kept with each would "
+            "hold every step's tensors)",
+            "返回的损失还带着计算图：应该 return critic_loss.detach(), actor_loss.detach()（循环"
+            "只是记录它们；\n  带着图，每一步的张量都不能释放）"))
     try:
         got_actor = float(got[1])
     except (TypeError, ValueError, RuntimeError):
@@ -546,6 +616,13 @@ def check_ddpg_update(fn):
     batch2 = (torch.randn(4, 3, generator=gen), torch.rand(4, 1, generator=gen) * 4 - 2,
               torch.randn(4, generator=gen), torch.randn(4, 3, generator=gen),
               t(1.0, 1.0, 0.0, 1.0))
+    kept = {}  # what each zero_grad() left out gives, from the script's state after update 1
+    for name in ("critic", "actor"):
+        kept[name] = copy.deepcopy(theirs)  # deepcopy leaves .grad behind: copied here
+        for key in ("critic", "actor"):
+            for p, q in zip(kept[name][key].parameters(), theirs[key].parameters()):
+                p.grad = None if q.grad is None else q.grad.clone()
+        ddpg_update_keeping(kept[name], batch2, cfg, name)
     expected, got = own(*theirs.values(), batch2, cfg), fn(*yours.values(), batch2, cfg)
     case = tr("case: a second update right after the first, on another minibatch (the fourth "
               "sample terminated)\n  ", "例子：紧接着第一次之后的第二次更新，换一个小批量（第四个样本"
@@ -562,6 +639,17 @@ def check_ddpg_update(fn):
                     "\n  评论员下一步更新时把它也加了进去：用 backward(inputs=list(actor.parameters()))，"
                     "\n  或者紧挨着 critic_loss.backward() 之前调用 critic_opt.zero_grad()"
                 ) if name == "critic" and leftover else ""
+                if not named and name in kept and all(
+                        torch.allclose(a, b, atol=1e-6) for a, b in
+                        zip(yours[name].parameters(), kept[name][name].parameters())):
+                    opt = f"{name}_opt.zero_grad()"
+                    named = tr(f"\n  this is exactly what this mistake gives: gradients "
+                               f"accumulated across updates: {opt} missing\n    (backward() "
+                               f"adds to .grad; the first update's gradient was added to the "
+                               f"second's)",
+                               f"\n  你的值恰好是这个常见错误会得到的值：\n    梯度在两次更新之间"
+                               f"累加了：漏了 {opt}\n    （backward() 是往 .grad 上加；第一次更新"
+                               f"的梯度被加进了第二次的）")
                 raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
                                        f"(largest difference {gap(p, q):.3g})",
                                        f"{what}：{pname} 和脚本自己的不同（最大相差 "
@@ -584,24 +672,39 @@ def check_soft_update(fn):
         fn(target, source, 0.1)
         got = [round(float(x), 6) for p in target.parameters() for x in p.detach().flatten()]
         if got != [expected] * 3:
-            swapped_tau = tr("\n  this is exactly what this mistake gives: tau and 1 - tau "
-                             "swapped (the target jumps most of the way)",
-                             "\n  你的值恰好是这个常见错误会得到的值：\n"
-                             "    tau 和 1 - tau 放反了（目标网络一下子移动了大部分距离）"
-                             ) if got == [0.9] * 3 else ""
+            first = expected == 0.1  # what each mistake gives after the first update
+            known = {0.9 if first else 0.99: tr(
+                         "tau and 1 - tau swapped (the target jumps most of the way)",
+                         "tau 和 1 - tau 放反了（目标网络一下子移动了大部分距离）"),
+                     0.0: tr("the target did not move: assign in place (p_target.mul_/add_ or "
+                             "copy_), and move the target, not the source\n    (p_target = ... "
+                             "only rebinds a name; the network keeps its old tensor)",
+                             "目标网络没有动：要原地赋值（p_target.mul_/add_ 或 copy_），并且动的是"
+                             "目标网络，不是当前网络\n    （p_target = ... 只是让这个名字指向新张量，"
+                             "网络里还是原来的那个）"),
+                     1.0: tr("a hard copy: tau = 1 (the target becomes the network at once)",
+                             "硬拷贝：相当于 tau = 1（目标网络一下子变成了当前网络）"),
+                     0.09 if first else 0.171: tr(
+                         "the two steps in the wrong order: add_(tau * theta) then mul_(1 - "
+                         "tau) scales theta too;\n    mul_(1 - tau) first, then add_(tau * "
+                         "theta)", "两步的顺序反了：先 add_(tau * theta) 再 mul_(1 - tau)，"
+                         "把 theta 也缩小了；\n    应该先 mul_(1 - tau)，再 add_(tau * theta)")}
+            label = known.get(got[0]) if len(set(got)) == 1 else None
             raise Failed(tr(
-                f"case: theta' = 0, theta = 1, tau = 0.1, twice: 0.1, then 0.19\n  target's "
-                f"weights and bias after soft_update: expected {expected} each (theta' = tau * "
-                f"theta + (1 - tau) * theta'), got {got}",
-                f"例子：theta' = 0，theta = 1，tau = 0.1，做两次：先 0.1，再 0.19\n  软更新后目标网络的"
-                f"权重和偏置：应该都是 {expected}（theta' = tau * theta + (1 - tau) * theta'），"
-                f"得到的是 {got}") + swapped_tau)
+                f"case: theta' = 0, theta = 1, tau = 0.1: two soft updates in a row, 0.1 after "
+                f"the first, 0.19 after the second\n  target's weights and bias after soft_update: "
+                f"expected {expected} each (theta' = tau * theta + (1 - tau) * theta'), got {got}",
+                f"例子：theta' = 0，theta = 1，tau = 0.1：连续软更新两次，第一次后应为 0.1，第二次后应为 "
+                f"0.19\n  软更新后目标网络的权重和偏置：应该都是 {expected}（theta' = tau * theta + "
+                f"(1 - tau) * theta'），得到的是 {got}") + (tr(
+                    "\n  this is exactly what this mistake gives: ",
+                    "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label if label else ""))
     if [id(p) for p in target.parameters()] != before:
         raise Failed(tr("the target's parameters were replaced, not updated in place",
                         "目标网络的参数被换成了新的张量，而不是原地更新"))
     if [float(x) for p in source.parameters() for x in p.detach().flatten()] != [1.0] * 3:
         raise Failed(tr("soft_update changed the source network; only the target moves",
-                        "soft_update 改了原网络；应该只动目标网络"))
+                        "soft_update 改了当前网络；应该只动目标网络"))
 
 
 def td3_case(sigma, c, low, high):
@@ -638,7 +741,7 @@ def td3_cases():
     # min(Q1', Q2') at a~: rows (3 + d, 4 + 2d), (5 + d, 2 + 2d), (1 + d, 1 + 2d), d = (a~ - mu')^2
     return [
         (tr("sigma = 0 (no smoothing): Q1' = (3, 5, 1), Q2' = (4, 2, 1), the third terminated: "
-            "y = 1 + 0.5 * min", "sigma = 0（不平滑）：Q1' = (3, 5, 1)，Q2' = (4, 2, 1)，第三个终止："
+            "y = 1 + 0.5 * min", "σ = 0（不平滑）：Q1' = (3, 5, 1)，Q2' = (4, 2, 1)，第三个终止："
             "y = 1 + 0.5 * min"), (0.0, 0.5, [-3.0], [3.0]), t(2.5, 2.0, 1.0),
          [(tr("max where clipped double Q takes the smaller", "取了较大的，裁剪双 Q 要取较小的"),
            t(3.0, 3.5, 1.0)),
@@ -657,13 +760,21 @@ def td3_cases():
               "(here mu(s') = mu'(s') + 1)", "用了正在训练的当前演员 nets[\"actor\"]，应该用目标演员 "
               "mu'（这里 mu(s') = mu'(s') + 1）"), t(3.0, 3.0, 1.0))]),
         (tr("sigma = 10000, c = 0.5, half_width = 2: eps always clipped, |a~ - mu'(s')| = 1",
-            "sigma = 10000，c = 0.5，half_width = 2：噪声总被裁剪，|a~ - mu'(s')| = 1"),
+            "σ = 10000，c = 0.5，half_width = 2：噪声总被裁剪，|a~ - mu'(s')| = 1"),
          (1e4, 0.5, [-3.0], [3.0]), t(3.0, 3.0, 1.0),
          [(tr("eps not scaled by half_width (or clipped after the scaling): |a~ - mu'| = 0.5",
               "噪声没有乘 half_width（或者乘了之后才裁剪）：|a~ - mu'| = 0.5"), t(2.625, 2.25, 1.0)),
           (tr("the noise not clipped to [-c, c]: with sigma = 10000, a~ lands on the action "
-              "box's edge, |a~ - mu'| = 3", "噪声没有裁剪到 [-c, c]：sigma = 10000 时，a~ 落在动作范围的"
+              "box's edge, |a~ - mu'| = 3", "噪声没有裁剪到 [-c, c]：σ = 10000 时，a~ 落在动作范围的"
               "边上，|a~ - mu'| = 3"), t(7.0, 8.0, 1.0))]),
+        (tr("sigma = 0.3, c = 10, the box [-100, 100] (noise neither clipped nor boxed), "
+            "torch.manual_seed(0) before the call:\n  one draw eps = torch.randn_like(action), "
+            "both critics at the same a~",
+            "σ = 0.3，c = 10，动作范围 [-100, 100]（噪声既不被裁剪也不被限制），调用前 "
+            "torch.manual_seed(0)：\n  只抽一次 eps = torch.randn_like(action)，两个评论员在同一个 a~ "
+            "上取值"), (0.3, 10.0, [-100.0], [100.0]), "noise",
+         [(tr("two noise draws, one per critic: both critics must be evaluated at the same a~",
+              "抽了两次噪声，每个评论员各一次：两个评论员要在同一个 a~ 上取值"), "two draws")]),
         (tr("the same noise, the action box [-0.5, 0.5]: a~ = +-1 clipped into the box, to +-0.5",
             "同样的噪声，动作范围 [-0.5, 0.5]：a~ = ±1 要限制到范围内，成为 ±0.5"),
          (1e4, 0.5, [-0.5], [0.5]), t(2.625, 2.25, 1.0),
@@ -672,9 +783,24 @@ def td3_cases():
     ]
 
 
+def td3_noisy_y(batch, sigma, c, draws):
+    """y where eps ~ N(0, sigma^2) is drawn (after torch.manual_seed(0)) once for both
+    critics, or once per critic (draws = 2); half_width 2, mu'(s') = 0, the box wide."""
+    torch.manual_seed(0)
+    d = [((2.0 * (torch.randn_like(batch[1]) * sigma).clamp(-c, c)) ** 2).sum(-1)
+         for _ in range(draws)]
+    s, reward, not_done = batch[3], batch[2], batch[4]
+    return reward + 0.5 * not_done * torch.min(s[:, 0] + d[0], s[:, 1] + 2 * d[-1])
+
+
 def check_td3_target(fn):
     for what, settings, expected, mistakes in td3_cases():
         nets, batch, half_width, low, high, cfg = td3_case(*settings)
+        if isinstance(expected, str):  # the noise drawn: y from the same seed
+            expected = td3_noisy_y(batch, *settings[:2], draws=1)
+            mistakes = [(label, td3_noisy_y(batch, *settings[:2], draws=2))
+                        for label, _ in mistakes]
+        torch.manual_seed(0)
         fn(nets, batch, half_width, low, high, cfg)
         y1, y2 = (None if nets[k].q.grad is None else -nets[k].q.grad * 3 / 2
                   for k in ("critic", "critic2"))
@@ -689,7 +815,7 @@ def check_td3_target(fn):
                      if torch.allclose(y1, value, atol=1e-4)] if y1 is not None else []
             if y1 is not None and (y1 - expected).abs().max() > 100:  # sigma = 10000 here
                 named = [tr("the noise not clipped to [-c, c] (sigma is 10000 in this case)",
-                            "噪声没有裁剪到 [-c, c]（这个例子里 sigma 是 10000）")]
+                            "噪声没有裁剪到 [-c, c]（这个例子里 σ 是 10000）")]
             raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
                 "\n  this is exactly what this mistake gives: ",
                 "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None
@@ -874,7 +1000,7 @@ def ppo_rollout_mistake(key, got, t, term, trunc, valid, autoreset, stored_trunc
         if got.all() and not valid[t].all():
             return tr("the autoreset step not masked: the reset step's ignored action and 0 "
                       "reward would train pi (valid = ~autoreset)", "没有掩掉自动重置步：重置步"
-                      "被忽略的动作和 0 奖励会拿去训练 pi（valid = ~autoreset）")
+                      "被忽略的动作和 0 奖励会拿去训练 π（valid = ~autoreset）")
         if np.array_equal(got, autoreset):
             return tr("valid = autoreset: the mask says where the reset steps are, valid where "
                       "the rows train (valid = ~autoreset)", "valid = autoreset：掩码标的是重置步"
@@ -1161,7 +1287,7 @@ def sac_variant(actor, obs, alpha, correction="exact", q_at="a", logp_of="u", re
 def sac_value_mistakes():
     return [
         (tr("no tanh correction: log pi is the Gaussian's log density of u alone",
-            "没有 tanh 的修正：log pi 只用了 u 的高斯对数密度"), dict(correction="none")),
+            "没有 tanh 的修正：log π 只用了 u 的高斯对数密度"), dict(correction="none")),
         (tr("the correction's sign flipped: + log(scale * (1 - tanh(u)^2)), where the change of "
             "variables subtracts it", "修正项的符号反了：变量替换要减去 log(scale * (1 - tanh(u)^2))，"
             "不是加上"), dict(correction="flipped")),
@@ -1187,12 +1313,12 @@ def sac_value_mistakes():
         (tr("the Gaussian's log density taken at the squashed action a, not at u",
             "高斯的对数密度在压缩后的动作 a 处取值，应该在 u 处"), dict(logp_of="a")),
         (tr("log pi averaged over the action's dimensions, not summed (the density of a vector is "
-            "the product of its dimensions')", "log pi 对动作的各维求了平均，应该求和（向量的密度是"
+            "the product of its dimensions')", "log π 对动作的各维求了平均，应该求和（向量的密度是"
             "各维密度的乘积）"), dict(reduce="mean")),
         (tr("max(Q1, Q2) where SAC takes the smaller", "取了 max(Q1, Q2)，SAC 取较小的"),
          dict(critics="max")),
         (tr("the entropy term's sign: the loss is alpha * log pi - Q (a lower log pi, more "
-            "entropy, lowers it)", "熵那一项的符号反了：损失是 alpha * log pi - Q（log pi 越小、熵越大，损失越小）"),
+            "entropy, lowers it)", "熵那一项的符号反了：损失是 alpha * log π - Q（log π 越小、熵越大，损失越小）"),
          dict(entropy=-1.0))]
 
 
@@ -1202,7 +1328,7 @@ def sac_gradient_mistakes():
             "(the reparameterisation lost)", "u 用 sample() 抽取，不是 rsample()：梯度穿不过采样"
             "（丢了重参数化）"), dict(draw="sample")),
         (tr("log pi detached in the loss: the entropy term no longer trains the actor",
-            "损失里的 log pi 被 detach 了：熵那一项不再训练演员"), dict(detach_logp=True)),
+            "损失里的 log π 被 detach 了：熵那一项不再训练演员"), dict(detach_logp=True)),
         (tr("the action detached before the critics: Q's gradient no longer reaches the actor",
             "动作在送进评论员之前被 detach 了：Q 的梯度传不到演员"), dict(detach_a=True))]
 
@@ -1210,7 +1336,7 @@ def sac_gradient_mistakes():
 def sac_cases():
     return [
         (tr("scale 1, two action dimensions: u = mean + sigma * eps = (0.5, -1) and (1, 2)",
-            "scale 1，两维动作：u = mean + sigma * eps = (0.5, -1) 和 (1, 2)"),
+            "scale 1，两维动作：u = mean + σ * eps = (0.5, -1) 和 (1, 2)"),
          sac_case([[0.5, -1.0], [0.0, 1.0]], [[0.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [1.0, 1.0]],
                   [-1.0, -1.0], [1.0, 1.0])),
         (tr("the action box [-1, 3] x [-2, 2]: scale (2, 2), bias (1, 0); u as above",
@@ -1250,7 +1376,7 @@ def check_sac_actor_loss(fn):
         inputs = tr(f"\n  input: mean={rounded(mean)}, sigma={rounded(log_std.exp())}, "
                     f"eps={rounded(eps)}, scale={rounded(scale)}, bias={rounded(bias)}, alpha=0.5;"
                     f" Q1 = s_0 + sum(a), Q2 = s_1 + 2 sum(a), s = {rounded(obs)}",
-                    f"\n  输入：mean={rounded(mean)}，sigma={rounded(log_std.exp())}，"
+                    f"\n  输入：mean={rounded(mean)}，σ={rounded(log_std.exp())}，"
                     f"eps={rounded(eps)}，scale={rounded(scale)}，bias={rounded(bias)}，alpha=0.5；"
                     f"Q1 = s_0 + sum(a)，Q2 = s_1 + 2 sum(a)，s = {rounded(obs)}")
         named = ""
@@ -1383,13 +1509,16 @@ def compare_gradients(ex, fn, args):
     reference, yours = gradients(own, args, parameters), gradients(fn, args, parameters)
     if reference is None:
         return
+    cut = ("" if not getattr(ex, "cut", None) else
+           tr("\n  this is exactly what this mistake does: ",
+              "\n  这正是这个常见错误的表现：\n    ") + ex.cut())
     if yours is None:
         raise Failed(tr(
             "gradient cut: your loss has the right value and carries no gradient at all (it was "
             "computed\n  under torch.no_grad(), from .item() or .detach(), or from a tensor made "
             "anew): the optimizer\n  would change nothing",
             "梯度被切断：你的损失数值对，但完全不带梯度（它是在 torch.no_grad() 下算的，或经过了 "
-            ".item()、\n  .detach()，或由新建的张量算出）：优化器什么也改不了"))
+            ".item()、\n  .detach()，或由新建的张量算出）：优化器什么也改不了") + cut)
     for name, r in reference.items():
         g = yours[name]
         if torch.allclose(g, r, atol=1e-6, rtol=1e-4):
@@ -1400,7 +1529,7 @@ def compare_gradients(ex, fn, args):
                 f"or a tensor made\n  anew, on the way from {name} to the loss): expected "
                 f"{rounded(r)}, got zeros",
                 f"梯度被切断：数值对，但梯度传不到 {name}（从 {name} 到损失的路上有 .detach() "
-                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0"))
+                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0") + cut)
         if r.abs().max() <= 1e-8:
             raise Failed(tr(
                 f"a gradient where none belongs: the value is right, and your loss sends a "
@@ -1444,7 +1573,18 @@ def worked_cases(ex, fn):
         return check_sac_actor_loss(fn)
     for what, args, expected in ex.cases():
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
-        got = fn(*args)
+        try:
+            got = fn(*args)
+        except RuntimeError as e:
+            if ex.name == "group_advantages" and "must match the size" in str(e):
+                raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
+                             + f"{show(ex, args)}\n  " + tr("your function raised ", "你的函数抛出了 ")
+                             + error(e) + tr(
+                                 "\n  this is exactly what this mistake raises: mean/std without "
+                                 "keepdim=True: (B/G,) cannot broadcast against (B/G, G)",
+                                 "\n  这正是这个常见错误会引发的：\n    mean/std 没有写 "
+                                 "keepdim=True：形状 (B/G,) 不能和 (B/G, G) 广播")) from None
+            raise
         for a, b in zip(args, saved):
             if torch.is_tensor(a) and not torch.equal(a, b):
                 raise Failed(tr(f"{what}: your function changed one of its inputs in place",
@@ -1463,7 +1603,7 @@ def worked_cases(ex, fn):
             compare_gradients(ex, fn, args)
         except Failed as e:
             raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
-                         + f"{show(ex, args)}\n  {e}{named_mistake(ex, args, got)}") from None
+                         + f"{show(ex, args)}\n  {e}{named_mistake(ex, args, got, fn)}") from None
 
 
 # ==== Known mistakes: where a wrong value is exactly what a named mistake gives, say so =========
@@ -1541,15 +1681,19 @@ def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
              gae_with(r, v, nv, term, trunc, gamma, lam, next_v=False)),
             (tr("the sum is not cut where an episode ended", "回合结束处没有切断累加"),
              gae_with(r, v, nv, term, trunc, gamma, lam, term_resets=False)),
-            (tr("values[t + 1] where next_values[t] belongs: after a truncation values[t + 1] is "
-                "the next episode's first state, not the final observation",
-                "用了 values[t + 1]，应该是 next_values[t]：时间截断之后，values[t + 1] 是下一个"
-                "回合的第一个状态，不是最后的观测"),
+            (tr("values[t + 1] where next_values[t] belongs: use next_values; they coincide "
+                "with values[t + 1] in this project's\n    loops (NEXT_STEP autoreset stores the "
+                "final obs at t + 1), not under every autoreset convention\n    (e.g. where the "
+                "final obs is kept apart and the obs at t + 1 is the next episode's first)",
+                "用了 values[t + 1]，应该是 next_values[t]：要用 next_values。在本项目的循环里"
+                "两者相同\n    （NEXT_STEP 自动重置在 t + 1 处存的是最后的观测），但不是每种自动重置方式"
+                "都这样\n    （例如最后的观测另外存放，t + 1 处是下一个回合的第一个观测）"),
              gae_with(r, v, nv, term, trunc, gamma, lam, shifted=True))]
 
 
 def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,
-              renormalized=False, upper_only=False, min_of_clipped_product=False):
+              renormalized=False, upper_only=False, min_of_clipped_product=False,
+              ratio_min=False):
     logp = Categorical(logits=policy(data["obs"])).log_prob(data["act"]).detach()
     r = torch.exp(data["logp"] - logp) if inverted else torch.exp(logp - data["logp"])
     a = data["adv"]
@@ -1557,6 +1701,8 @@ def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=Fal
         a = (a - a.mean()) / (a.std() + 1e-8)
     if upper_only:
         return -torch.min(r * a, r.clamp(max=1 + eps) * a).mean()
+    if ratio_min:
+        return -(torch.min(r, r.clamp(1 - eps, 1 + eps)) * a).mean()
     if min_of_clipped_product:
         return -torch.min(r * a, (r * a).clamp(1 - eps, 1 + eps)).mean()
     if clip_product:
@@ -1567,7 +1713,7 @@ def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=Fal
 def clip_mistakes(policy, data, eps):
     right = surrogate(policy, data, eps)
     return [(tr("the ratio upside down: pi_old / pi, exp(logp_old - logp)",
-                "比值倒过来了：pi_old / pi，即 exp(logp_old - logp)"),
+                "比值倒过来了：π_old / π，即 exp(logp_old - logp)"),
              surrogate(policy, data, eps, inverted=True)),
             (tr("max where the pessimistic bound takes min", "用了 max，悲观的下界要取 min"),
              surrogate(policy, data, eps, use_max=True)),
@@ -1578,6 +1724,11 @@ def clip_mistakes(policy, data, eps):
                 "在 min 里裁剪了乘积 r * A，即 min(r A, clip(r A, 1 - eps, 1 + eps))：应该先裁剪比值，"
                 "再乘 A，即 min(r A, clip(r, 1 - eps, 1 + eps) A)"),
              surrogate(policy, data, eps, min_of_clipped_product=True)),
+            (tr("the min taken over the ratios, min(r, clip(r)) * A, where it is over the "
+                "products, min(r A, clip(r) A):\n    for A < 0 the pessimistic bound takes the "
+                "larger ratio", "min 取在比值上，即 min(r, clip(r)) * A，应该取在乘积上，即 "
+                "min(r A, clip(r) A)：\n    A < 0 时，悲观的下界要用较大的那个比值"),
+             surrogate(policy, data, eps, ratio_min=True)),
             (tr("the sign: the objective L_CLIP returned, where the loss is -L_CLIP",
                 "符号反了：返回的是目标 L_CLIP，损失应该是 -L_CLIP"), -right),
             (tr("a sum over the batch where the mean belongs", "对批量求了和，应该求均值"),
@@ -1597,16 +1748,19 @@ def kl_mistakes(policy, data, beta):
     s, kl, reverse = (r * data["adv"]).mean(), kl_divergence(old, dist).mean(), kl_divergence(
         dist, old).mean()
     return [(tr("the KL the other way round: KL(pi || pi_old); kl_divergence(p, q) is KL(p || q)",
-                "KL 的方向反了：写成了 KL(pi || pi_old)；kl_divergence(p, q) 是 KL(p || q)"),
+                "KL 的方向反了：写成了 KL(π || π_old)；kl_divergence(p, q) 是 KL(p || q)"),
              -s + beta * reverse),
             (tr("the surrogate's sign: +mean(r A) where the loss has -mean(r A)",
                 "代理目标的符号反了：损失里应该是 -mean(r A)"), s + beta * kl),
             (tr("the penalty's sign: - beta * KL where the loss adds it",
-                "惩罚项的符号反了：损失里应该加上 beta * KL"), -s - beta * kl),
+                "惩罚项的符号反了：损失里应该加上 β * KL"), -s - beta * kl),
             (tr("a sample estimate of the KL, mean(logp_old - logp), where the exact KL of the two "
                 "distributions belongs (kl_divergence)", "用了 KL 的样本估计 mean(logp_old - logp)，"
                 "应该用两个分布的精确 KL（kl_divergence）"),
-             -s + beta * (data["logp"] - dist.log_prob(data["act"])).mean())]
+             -s + beta * (data["logp"] - dist.log_prob(data["act"])).mean()),
+            (tr("the KL summed over the batch (.sum()) where its mean belongs (.mean())",
+                "KL 对批量求了和（.sum()），应该求均值（.mean()）"),
+             -s + beta * kl_divergence(old, dist).sum())]
 
 
 def a2c_mistakes(model, data, cfg):
@@ -1624,7 +1778,7 @@ def a2c_mistakes(model, data, cfg):
                 "评论员的损失没有乘 0.5（应该是 0.5 * mean((V - R)^2)）"),
              loss_pi + cfg.vf_coef * 2 * loss_v - cfg.ent_coef * ent),
             (tr("the actor's sign: +mean(log pi * A) (the loss is minus it)",
-                "演员项的符号反了：损失应该是 -mean(log pi * A)"),
+                "演员项的符号反了：损失应该是 -mean(log π * A)"),
              -loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * ent)]
 
 
@@ -1635,7 +1789,11 @@ def td_mistakes(reward, not_done, next_q, gamma):
             (tr("(1 - not_done): not_done is already 1 - terminated",
                 "写成了 (1 - not_done)：not_done 本身就是 1 - terminated"),
              reward + gamma * (1 - not_done) * next_q),
-            (tr("gamma left out", "漏了 gamma"), reward + not_done * next_q)]
+            (tr("gamma left out", "漏了 gamma"), reward + not_done * next_q),
+            (tr("(r + gamma * Q') * not_done: the reward itself zeroed at a termination; only "
+                "the future is cut, r + gamma * not_done * Q'",
+                "写成了 (r + gamma * Q') * not_done：终止时连奖励本身也被清零了；只该切掉未来，"
+                "即 r + gamma * not_done * Q'"), (reward + gamma * next_q) * not_done)]
 
 
 def actor_mistakes(actor, critic, obs):
@@ -1648,7 +1806,7 @@ def actor_mistakes(actor, critic, obs):
 def beta_mistakes(beta, d, cfg):
     lo, hi = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance
     return [(tr("the two rules swapped: beta must shrink when d is small, grow when it is large",
-                "两条规则反了：d 小时 beta 应该变小，d 大时变大"),
+                "两条规则反了：d 小时 β 应该变小，d 大时变大"),
              beta * cfg.beta_factor if d < lo else beta / cfg.beta_factor if d > hi else beta),
             (tr("the tolerance (1.5) used as the factor (2)", "把容差（1.5）当成了倍数（2）"),
              beta / cfg.kl_tolerance if d < lo else beta * cfg.kl_tolerance if d > hi else beta),
@@ -1657,12 +1815,22 @@ def beta_mistakes(beta, d, cfg):
              beta / cfg.beta_factor if d <= lo else beta * cfg.beta_factor if d >= hi else beta)]
 
 
-def named_mistake(ex, args, got):
+def named_mistake(ex, args, got, fn=None):
     """The name of a known mistake whose value `got` (the function's first output) is, or ''."""
     if ex.mistakes is None:
         return ""
     got = got[0] if isinstance(got, tuple) else got
-    for label, value in ex.mistakes(*args):
+    mistakes = ex.mistakes(*args)
+    if ex.name == "group_advantages" and fn is not None:  # three denominators, one value here
+        pick = group_eps_mistake(fn)
+        eps = [m for m in mistakes if "1e-" in m[0]]
+        if pick is not None:
+            mistakes = [m for m in mistakes if m not in eps] + [eps[pick - 1]]
+        else:
+            mistakes = [m for m in mistakes if m not in eps[1:]]
+    for label, value in mistakes:
+        if value is None:  # this mistake gives the right value in this case
+            continue
         try:
             same = (torch.is_tensor(got) and torch.is_tensor(value) and got.shape == value.shape
                     and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5))
@@ -1718,6 +1886,20 @@ def loop_logs(ex, fn, tmp):
 
 
 REFERENCE = {}  # the script's own logs per loop setting, run once per process
+ROUNDING = 1e-5  # a first difference in (b) this small (relative) is float rounding, not a bug
+
+
+def relative(a, b):
+    a, b = float(a), float(b)
+    return abs(a - b) / max(abs(a), abs(b), 1e-30)
+
+
+def rounding_only(a, b):
+    """True where two logged numbers differ in their last digits only."""
+    try:
+        return math.isfinite(float(a)) and math.isfinite(float(b)) and relative(a, b) < ROUNDING
+    except (TypeError, ValueError):
+        return False
 
 
 def never_called(ex, stage):
@@ -1736,6 +1918,15 @@ def real_loop(ex, fn):
         if key not in REFERENCE:
             REFERENCE[key] = loop_logs(ex, None, Path(tmp) / "reference")
         reference = REFERENCE[key]
+        if ex.script == "grpo_addition" and not any(
+                r.get("flat_groups") not in (None, "", "nan") and float(r["flat_groups"]) < 1
+                for r in reference):
+            raise Failed(tr(
+                "in stage (b)'s run every group's rewards are equal: every advantage is 0, so "
+                "the stage would pass\n  answers that differ. This is the checker's fault, not "
+                "yours: please report it.",
+                "第 (b) 关的训练里每一组的奖励都相同：优势全是 0，所以不同的答案在这一关也分不出来。"
+                "\n  这是检查程序的问题，不是你的：请报告它。"))
         calls = [0]
 
         def counted(*args, **kw):
@@ -1765,6 +1956,17 @@ def real_loop(ex, fn):
                         f"在第 {a['global_step']} 步结束的那次学习（progress.csv）")
                      if a.get("where") == "progress" else
                      (f"{unit} {n}" if LANG == "en" else unit.format(n)))
+            if rounding_only(a[key], b.get(key)):
+                # (a) passed and the first difference is in the last digits: the same formula
+                # with its float operations in another order (e.g. lerp_, or add_(tau * (p -
+                # p')), for mul_ then add_); from there the two runs drift apart, as any would
+                return tr(f"the logs first differ at {where}, in {key}, by rounding only "
+                          f"({a[key]} vs {b.get(key)}): probably only the order of float "
+                          f"operations;\n  your function is right in value (written in the "
+                          f"script's own order, it gives identical logs)",
+                          f"日志第一次不同是在{where}，{key}，只差在舍入上（{a[key]} 对 "
+                          f"{b.get(key)}）：多半只是浮点运算的顺序不同；\n  你的函数在数值上"
+                          f"是对的（按脚本自己的运算顺序写，日志会完全相同）")
             raise Failed(tr(f"{ex.script}.train() with your function: the logs first differ at "
                             f"{where}, in {key}: the script's own gives {a[key]}, yours "
                             f"{b.get(key)}",
@@ -1838,9 +2040,12 @@ DDPG_LEARN = dict(DDPG_IN_MINUTES, seed=0, total_timesteps=20_000, print_every=1
 # TD3 on the same task and settings; 30,000 steps: its delayed actor starts slower (seed 0
 # holds 1000 from step 27,500 on, tests/test_td3_walker.py)
 TD3_LOOP, TD3_LEARN = DDPG_LOOP, dict(DDPG_LEARN, total_timesteps=30_000)
-# GRPO: a short supervised phase, then a few GRPO steps (the loop); the default run (learning)
-GRPO_LOOP = dict(seed=0, sft_steps=20, grpo_steps=4, prompts=8, eval_every=20, eval_prompts=20,
-                 curves=False, print_every=10**6)
+# GRPO: a short supervised phase, then a few GRPO steps (the loop); the default run (learning).
+# One-digit sums, so that after 60 supervised steps some groups already mix right and wrong
+# answers (seed 0: 3 to 5 of the 8 groups in each of the 4 steps): with every reward 0, every
+# advantage and KL would be 0, and (b) could not tell answers apart (real_loop checks it)
+GRPO_LOOP = dict(seed=0, digits=1, sft_steps=60, grpo_steps=4, prompts=8, eval_every=20,
+                 eval_prompts=20, curves=False, print_every=10**6)
 GRPO_LEARN = dict(seed=0, curves=False, print_every=10**6)
 GRPO_BAR = 0.9  # held-out pass@1 after GRPO: seeds 0-4 gave 0.941 to 0.955, the start 0.70-0.76
 
@@ -1877,10 +2082,12 @@ def OFF_POLICY():
 
 
 def exercise(name, script, function, owner, cases, loop, learn, hint, outputs=("output",),
-             mistakes=None):
+             mistakes=None, cut=None):
+    """cut: the mistake's name where the value is right and the gradient cut, if one fits."""
     return SimpleNamespace(name=name, script=script, function=function, cases=cases,
                            owner=lambda: importlib.import_module(owner), loop=loop,
-                           learn=learn, loop_hint=hint, outputs=outputs, mistakes=mistakes)
+                           learn=learn, loop_hint=hint, outputs=outputs, mistakes=mistakes,
+                           cut=cut)
 
 
 EXERCISES = {ex.name: ex for ex in (
@@ -1907,20 +2114,40 @@ EXERCISES = {ex.name: ex for ex in (
              outputs=("loss_pi", "entropy", "info"), mistakes=kl_mistakes),
     exercise("adapt_beta", "ppo_kl_cartpole", "adapt_beta", "ppo_kl_cartpole", beta_cases,
              dict(CARTPOLE_LOOP, total_timesteps=2560), CARTPOLE_LEARN,
-             lambda: tr("Each update's beta comes from your rule.", "每次更新的 beta 都来自你的规则。"),
+             lambda: tr("Each update's beta comes from your rule.", "每次更新的 β 都来自你的规则。"),
              outputs=("beta",), mistakes=beta_mistakes),
     exercise("a2c_loss", "actor_critic_cartpole", "a2c_loss", "actor_critic_cartpole",
              a2c_cases, dict(CARTPOLE_LOOP, total_timesteps=1600), CARTPOLE_LEARN, ON_REAL_DATA,
              outputs=("loss", "stats"), mistakes=a2c_mistakes),
     exercise("td_target", "ddpg_walker", "td_target", "ddpg_walker", td_cases, DDPG_LOOP,
-             DDPG_LEARN, lambda: tr("The critic is trained toward your targets. ",
-                                    "评论员朝你的目标训练。") + OFF_POLICY(), outputs=("y",),
+             DDPG_LEARN, lambda: tr(
+                 "The critic is trained toward your targets: critic_loss differs first, at the "
+                 "first step where your y\n  differs; actor_loss follows, through the critic.",
+                 "评论员朝你的目标训练：critic_loss 最先不同，就在你的 y 第一次不同的那一步；"
+                 "\n  actor_loss 随后也不同，因为它经过评论员。"), outputs=("y",),
              mistakes=td_mistakes),
     exercise("actor_loss", "ddpg_walker", "compute_loss_actor", "ddpg_walker", actor_cases,
-             DDPG_LOOP, DDPG_LEARN, OFF_POLICY, outputs=("actor_loss",), mistakes=actor_mistakes),
+             DDPG_LOOP, DDPG_LEARN, lambda: tr(
+                 "The actor descends your loss: actor_loss differs at the first step where its "
+                 "value differs; where only\n  its gradient differs, critic_loss differs "
+                 "first, a step later: its target Q'(s', mu'(s')) uses the\n  actor's target "
+                 "network, which follows the actor.",
+                 "演员沿你的损失下降：损失的数值不同时，actor_loss 在第一个不同的步就不同；只有梯度"
+                 "不同时，\n  critic_loss 会晚一步先不同：它的目标 Q'(s', mu'(s')) 用到目标演员，"
+                 "而目标演员跟着演员走。"),
+             outputs=("actor_loss",), mistakes=actor_mistakes,
+             cut=lambda: tr("the action computed without a gradient: torch.no_grad() or "
+                            ".detach() around actor(obs) cuts the actor off\n    (Q(s, mu(s)) "
+                            "must reach mu(s): only the critic's parameters stay out of the step)",
+                            "动作是在不带梯度的情况下算的：actor(obs) 外面的 torch.no_grad() 或 "
+                            ".detach() 把演员切断了\n    （Q(s, mu(s)) 的梯度要传到 mu(s)；"
+                            "不更新的只是评论员的参数）")),
     exercise("soft_update", "ddpg_walker", "soft_update", "ddpg_walker", lambda: [], DDPG_LOOP,
-             DDPG_LEARN, lambda: tr("The targets move by your soft update. ",
-                                    "目标网络按你的软更新移动。") + OFF_POLICY()),
+             DDPG_LEARN, lambda: tr(
+                 "The target networks moved by your function; the critic's loss differs first "
+                 "because its target,\n  Q'(s', mu'(s')), uses those networks.",
+                 "目标网络是由你的函数移动的；评论员的损失最先不同，是因为它的目标 Q'(s', mu'(s'))"
+                 "\n  用的就是这两个目标网络。")),
     exercise("td3_target", "td3_walker", "update_critics", "td3_walker", lambda: [], TD3_LOOP,
              TD3_LEARN, lambda: tr("Both critics are trained toward your target; the noise comes "
                                    "from torch's generator in\n  the script's order "
@@ -1968,7 +2195,7 @@ EXERCISES = {ex.name: ex for ex in (
              outputs=("stats",)),
     exercise("sac_actor_loss", "sac_walker", "compute_loss_actor", "sac_walker", lambda: [],
              SAC_LOOP, SAC_LEARN, lambda: tr("The actor descends your loss, and alpha follows "
-                                            "your log pi. ", "演员沿你的损失下降，alpha 跟着你的 log pi 调整。")
+                                            "your log pi. ", "演员沿你的损失下降，alpha 跟着你的 log π 调整。")
              + OFF_POLICY(), outputs=("actor_loss", "logp")),
 )}
 
@@ -2020,7 +2247,7 @@ def check(name, fn=None, learning=True, say=print):
     for stage, run in stages:
         start = time.time()
         try:
-            run(ex, fn)
+            note = run(ex, fn)
         except NotImplementedError:
             say(line(name, stage, fail, tr(
                 f"{NOT_WRITTEN} (fill in the blank in exercises/{name}.py)",
@@ -2033,7 +2260,8 @@ def check(name, fn=None, learning=True, say=print):
             say(line(name, stage, fail, tr("your function raised ", "你的函数抛出了 ") + error(e)))
             return False
         seconds = time.time() - start
-        say(line(name, stage, tr(f"pass ({seconds:.1f} s)", f"通过（{seconds:.1f} 秒）")))
+        say(line(name, stage, tr(f"pass ({seconds:.1f} s)", f"通过（{seconds:.1f} 秒）"),
+                 note or ""))
     return True
 
 
@@ -2057,14 +2285,16 @@ def main(argv=None):
     chinese = next(p for p in __doc__.split("\n\n") if p.startswith("检查练习"))
     parser = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0] + tr("", "\n\n" + chinese.replace("\n", "")),
-        formatter_class=tr(argparse.HelpFormatter, ChineseHelp))
+        formatter_class=tr(argparse.HelpFormatter, ChineseHelp), add_help=False)
+    parser.add_argument("-h", "--help", action="help", help=tr(
+        "show this help message and exit", "show this help message and exit\n显示本帮助并退出"))
     parser.add_argument("name", nargs="?", choices=sorted(EXERCISES), help=tr(
         "the exercise", "the exercise\n练习名；不写时，列出所有练习的第 (a)、(b) 关"))
     parser.add_argument("--no-learning", action="store_true", help=tr(
         "stop after stage (b)", "stop after stage (b)\n只跑第 (a)、(b) 两关，不跑第 (c) 关“学会任务”"))
     en = "the messages' language (default: from the locale, e.g. LANG=zh_CN.UTF-8 gives zh; else en)"
     parser.add_argument("--lang", choices=("zh", "en"), default=None, help=tr(en, en + (
-        "\n提示用的语言；不写时跟随系统的语言设置（例如 LANG=zh_CN.UTF-8 时是 zh），否则是 en")))
+        "\n提示用的语言；不写时看系统语言：LANG 等以 zh 开头就用中文，否则用英文")))
     args = parser.parse_args(argv)
     LANG = args.lang or locale_lang()
     if args.name:

@@ -6,7 +6,7 @@ tau toward the network's: theta' <- tau * theta + (1 - tau) * theta'.
     python exercises/check.py soft_update
 The reference answer: ddpg_walker.soft_update (ddpg_walker.py).
 
-练习：目标网络的软更新（Lillicrap 等 2016 的算法 1，对照教程 003）。每次更新后，目标网络的每个参数向原网络移动
+练习：目标网络的软更新（Lillicrap 等 2016 的算法 1，对照教程 003）。每次更新后，目标网络的每个参数向当前网络移动
 tau 的比例：theta' <- tau * theta + (1 - tau) * theta'。参考答案：ddpg_walker.soft_update。
 """
 

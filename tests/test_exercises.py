@@ -640,6 +640,98 @@ WRONG = {
 }
 
 
+
+def script_with(name, old, new):
+    """The script's own function for exercise `name`, with the line part `old` replaced."""
+    import inspect
+    ex = check.EXERCISES[name]
+    source = inspect.getsource(getattr(ex.owner(), ex.function))
+    assert source.count(old) == 1, old
+    return f"from {ex.owner().__name__} import *\n" + source.replace(old, new)
+
+
+SOFT = """def soft_update(target, source, tau):
+                with torch.no_grad():
+                    for pt, p in zip(target.parameters(), source.parameters()):
+                        {}"""
+GROUP = """def group_advantages(rewards, G, scale):
+                r = rewards.view(-1, G)
+                adv = r - r.mean(1{keep})
+                return (adv / {den} if scale else adv).reshape(-1)"""
+TD3_TWO_DRAWS = """def update_critics(nets, batch, half_width, low, high, cfg):
+                obs, action, reward, next_obs, not_done = batch
+                with torch.no_grad():
+                    mu = nets["actor_target"](next_obs)
+                    def smoothed():  # a fresh draw at each call: one per critic
+                        eps = (torch.randn_like(action) * cfg.target_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+                        return (mu + half_width * eps).clamp(low, high)
+                    q = torch.min(nets["critic_target"](next_obs, smoothed()),
+                                  nets["critic2_target"](next_obs, smoothed()))
+                    y = reward + cfg.gamma * not_done * q
+                critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
+                               + F.mse_loss(nets["critic2"](obs, action), y))
+                nets["critic_opt"].zero_grad()
+                critic_loss.backward()
+                nets["critic_opt"].step()
+                return critic_loss.detach()"""
+WRONG["soft_update"] += [
+    (SOFT.format("pt = tau * p + (1 - tau) * pt  # rebinds a name"), "(a)",
+     "the target did not move: assign in place"),
+    (SOFT.format("p.mul_(1 - tau).add_(tau * pt)  # moves the source"), "(a)",
+     "the target did not move"),
+    (SOFT.format("pt.copy_(p)"), "(a)", "a hard copy: tau = 1"),
+    (SOFT.format("pt.add_(tau * p).mul_(1 - tau)"), "(a)", "the two steps in the wrong order")]
+WRONG["grpo_loss"] += [
+    (script_with("grpo_loss", "per_token = (surrogate - cfg.beta * kl) * mask",
+                 "per_token = surrogate * mask - cfg.beta * kl"), "(a)",
+     "the KL term not masked: padding tokens pay a KL"),
+    (script_with("grpo_loss", "length = mask.sum(1) if cfg.length_norm else",
+                 "length = mask.sum(1) if True else"), "(a)", "length_norm ignored"),
+    (script_with("grpo_loss", "kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1",
+                 "kl = -log_ref_ratio"), "(a)", "k1, log(pi / pi_ref), where this loss uses k3"),
+    (script_with("grpo_loss", "loss = -(per_token.sum(1) / length).mean()",
+                 "loss = -per_token.mean()"), "(a)", "one mean over all (B, L) entries")]
+WRONG["actor_loss"] += [
+    ("""def compute_loss_actor(actor, critic, obs):
+                with torch.no_grad():
+                    a = actor(obs)
+                return -critic(obs, a).mean()""", "(a)",
+     "the action computed without a gradient: torch.no_grad() or .detach()")]
+WRONG["td3_target"] += [(TD3_TWO_DRAWS, "(a)", "two noise draws, one per critic")]
+WRONG["group_advantages"] += [
+    (GROUP.format(keep=", keepdim=True", den="r.std(1, keepdim=True).clamp_min(1e-4)"), "(a)",
+     "the 1e-4 as a floor (std.clamp_min(1e-4))"),
+    (GROUP.format(keep=", keepdim=True", den="(r.std(1, keepdim=True) + 1e-8)"), "(a)",
+     "1e-8 added where this project adds 1e-4"),
+    (GROUP.format(keep=", keepdim=True", den="r.std(1, keepdim=True)"), "(a)",
+     "the 1e-4 left out"),
+    (GROUP.format(keep="", den="(r.std(1) + 1e-4)"), "(a)", "mean/std without keepdim=True"),
+    ("""def group_advantages(rewards, G, scale):
+                return rewards.float()  # raw rewards: (a)'s first case tells, (b) must too""",
+     "(a)", "expected 1.4997")]
+WRONG["clipped_surrogate"] += [
+    (script_with("clipped_surrogate", "loss_pi = -torch.min(ratio * adv, clip_adv).mean()",
+                 "loss_pi = -(torch.min(ratio, torch.clamp(ratio, 1 - clip_coef, 1 + clip_coef)) * adv).mean()"),
+     "(a)", "the min taken over the ratios")]
+WRONG["grpo_loss"] += [  # the right value, the wrong gradient: no mistake's value may name it
+    (script_with("grpo_loss", "kl = torch.exp(log_ref_ratio) - log_ref_ratio - 1",
+                 "kl = (torch.exp(log_ref_ratio) - log_ref_ratio - 1).detach()"), "(a)",
+     "wrong gradient: the value is right")]
+WRONG["kl_penalty"] += [
+    (script_with("kl_penalty", 'dist).mean()', 'dist).sum()'), "(a)",
+     "the KL summed over the batch (.sum())")]
+WRONG["td_target"] += [
+    ("""def td_target(reward, not_done, next_q, gamma):
+                return (reward + gamma * next_q) * not_done""", "(a)",
+     "(r + gamma * Q') * not_done: the reward itself zeroed")]
+WRONG["ddpg_update"] += [
+    (script_with("ddpg_update", "    critic_opt.zero_grad()\n", ""), "(a)",
+     "gradients accumulated across updates: critic_opt.zero_grad() missing"),
+    (script_with("ddpg_update", "    actor_opt.zero_grad()\n", ""), "(a)",
+     "gradients accumulated across updates: actor_opt.zero_grad() missing"),
+    (script_with("ddpg_update", "return critic_loss.detach(), actor_loss.detach()",
+                 "return critic_loss, actor_loss"), "(a)", "the losses returned with their graph")]
+
 @pytest.fixture(autouse=True)
 def english():
     """The messages in English whatever the locale (the checker's default follows it)."""
@@ -826,6 +918,7 @@ def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monk
         check.main(["--help", "--lang", "zh"])
     out = capsys.readouterr().out
     assert "只跑第 (a)、(b) 两关" in out and "检查练习，分三关" in out, out
+    assert "显示本帮助并退出" in out and "LANG 等以 zh 开头就用" in out and "跟随" not in out, out
     monkeypatch.setattr(check, "LANG", "zh")
     passed, lines = run("td_target", compile_answer(WRONG["td_target"][0][0], "td_target"))
     assert "常见错误会得到的值：\n    没有乘 not_done，" in lines[-1], lines[-1]
@@ -870,3 +963,90 @@ def test_the_checker_from_the_command_line(tmp_path):
     assert p.returncode == 1 and "还没写" in p.stdout, p.stdout + p.stderr
     p = run_script("exercises/check.py", "nope", timeout=120)
     assert p.returncode == 2 and "invalid choice" in p.stderr
+
+
+@pytest.mark.parametrize("answer", ["raw rewards", "whole batch", "loss times 0"])
+def test_grpo_stage_b_tells_answers_apart(answer):
+    """Stage (b)'s GRPO run has groups with mixed rewards (one-digit sums after 60 supervised
+    steps), so advantages and the KL are not all 0 there: answers that (b) once passed whatever
+    they were (rewards as advantages, one mean and std for the batch, a loss of 0) fail it."""
+    import grpo_addition
+    own_loss = grpo_addition.grpo_loss
+    fn, name = dict(
+        [("raw rewards", (lambda rewards, G, scale: rewards.float(), "group_advantages")),
+         ("whole batch", (lambda rewards, G, scale: (rewards - rewards.mean())
+                          / (rewards.std() + 1e-4), "group_advantages")),
+         ("loss times 0", (lambda *args: (own_loss(*args)[0] * 0, own_loss(*args)[1]),
+                           "grpo_loss"))])[answer]
+    with pytest.raises(check.Failed, match="the logs first differ at update"):
+        check.real_loop(check.EXERCISES[name], fn)
+
+
+@pytest.mark.quick
+def test_grpo_stage_b_refuses_a_run_whose_groups_are_all_flat(monkeypatch):
+    """If the loop's settings ever give every group equal rewards again, (b) says it is the
+    checker's fault instead of passing every answer (the reference logs faked here)."""
+    ex = check.EXERCISES["grpo_loss"]
+    key = (ex.script, tuple(sorted(ex.loop.items())))
+    monkeypatch.setitem(check.REFERENCE, key, [dict(flat_groups="", loss="1.0"),
+                                               dict(flat_groups="1", loss="-0")])
+    with pytest.raises(check.Failed, match="every group's rewards are equal"):
+        check.real_loop(ex, lambda *args: None)
+    monkeypatch.setitem(check.REFERENCE, key, [dict(flat_groups="0.5", loss="-0.0025")])
+    monkeypatch.setattr(check, "loop_logs", lambda ex, fn, tmp: fn() or [
+        dict(flat_groups="0.5", loss="-0.0025")])
+    check.real_loop(ex, lambda *args: None)  # mixed groups: the stage runs, and passes here
+
+
+@pytest.mark.quick
+def test_stage_b_passes_a_rounding_only_difference_with_a_note(monkeypatch):
+    """The logs are compared exactly; where the first difference is in the last digits only
+    (relative < 1e-5), (b) passes with a note that it is probably only the order of float
+    operations; a larger first difference still fails."""
+    ex = check.EXERCISES["soft_update"]
+    key = (ex.script, tuple(sorted(ex.loop.items())))
+    reference = [dict(step="301", critic_loss="0.5", actor_loss="-1"),
+                 dict(step="302", critic_loss="0.623107", actor_loss="-1")]
+    monkeypatch.setitem(check.REFERENCE, key, reference)
+    for yours, passes in (("0.623106", True), ("0.623", False)):
+        rows = [dict(reference[0]), dict(reference[1], critic_loss=yours, actor_loss="-7")]
+        monkeypatch.setattr(check, "loop_logs", lambda ex, fn, tmp: fn() or rows)
+        if passes:
+            note = check.real_loop(ex, lambda *args: None)
+            assert "step 302, in critic_loss, by rounding only (0.623107 vs 0.623106)" in note
+            assert "probably only the order of float operations" in note
+        else:
+            with pytest.raises(check.Failed, match="script's own gives 0.623107, yours 0.623"):
+                check.real_loop(ex, lambda *args: None)
+
+
+def test_a_soft_update_right_in_value_passes_stage_b():
+    """p_target.lerp_(p, tau) is the soft update in another order of float operations: its
+    logs differ from step 302 on in the last digit; (b) passes it, saying why."""
+    passed, lines = run("soft_update", compile_answer(SOFT.format("pt.lerp_(p, tau)"),
+                                                      "soft_update"))
+    assert passed and "by rounding only" in lines[-1], lines
+
+
+@pytest.mark.quick
+def test_the_loop_notes_name_the_exercise_and_the_gae_message_fits_the_loops():
+    """soft_update's (b) note says what its function moved, not that another function may be
+    to blame; gae's values[t + 1] mistake says the two coincide in this project's loops."""
+    hint = check.EXERCISES["soft_update"].loop_hint()
+    assert "moved by your function" in hint and "another function" not in hint
+    r, v = check.t([1.0, 1.0], [1.0, 1.0]), check.t([1.0, 1.0], [2.0, 2.0])
+    labels = [label for label, _ in check.gae_mistakes(
+        r, v, v, check.flags([False, False], [False, False]),
+        check.flags([True, True], [False, False]), 0.5, 1.0)]
+    assert any("they coincide with values[t + 1] in this project's" in x for x in labels), labels
+    assert not any("is the next episode's first state, not" in x for x in labels), labels
+
+
+def test_a_mistake_that_gives_the_right_value_names_nothing():
+    """A wrong gradient with the right value (the k3 term detached) is not named after a
+    mistake whose value, in that case, is the right one (length_norm ignored, where
+    length_norm = True)."""
+    source = WRONG["grpo_loss"][-1][0]
+    passed, lines = run("grpo_loss", compile_answer(source, "grpo_loss"))
+    assert not passed and "wrong gradient" in lines[-1], lines
+    assert "this is exactly what this mistake" not in lines[-1], lines[-1]
