@@ -32,8 +32,9 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
-@pytest.mark.quick
 def test_smoke_run_writes_gifs_model_csv_and_curve(script, tmp_path):
+    """The CartPole runs' files in detail (the quick layer's smoke run of every script,
+    tests/test_every_script.py, checks that each is written and drawn)."""
     result = script.train(small(script, tmp_path, total_timesteps=2048, stop_when_solved=False,
                                 eval_episodes=2))
     run = result["run_dir"]

@@ -105,9 +105,9 @@ print("same" if after == before else f"changed: {after[0]} {set(after[1].items()
 """
 
 
-@pytest.mark.quick
-@pytest.mark.parametrize("order", [MODULES, MODULES[::-1], ("report", "ppo_cartpole", "common"),
-                                   ("ddpg_walker", "cli"), ("td3_walker",)])
+@pytest.mark.parametrize("order", [  # every module at once in the quick layer; the orders after
+    pytest.param(MODULES, marks=pytest.mark.quick),  # it in the default one
+    MODULES[::-1], ("report", "ppo_cartpole", "common"), ("ddpg_walker", "cli"), ("td3_walker",)])
 def test_importing_in_any_order_changes_nothing(order):
     """No import-order rule: whatever is imported first, SIGINT keeps Python's handler and
     the environment variables stay as they were (headless defaults are set where an env is
