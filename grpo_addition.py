@@ -144,7 +144,8 @@ class Config(cli.OutputFlags):
     beta: float = 0.04
     """weight of the KL penalty to the supervised model (DeepSeekMath: 0.04)"""
     scale_rewards: bool = True
-    """divide each advantage by its group's std (GRPO); --no-scale-rewards: Dr. GRPO's choice"""
+    """divide each advantage by its group's std (GRPO); --no-scale-rewards: Dr. GRPO's choice
+    (Liu et al. 2025's two fixes to GRPO: this one and --no-length-norm)"""
     length_norm: bool = True
     """average each completion's token losses over its own length (GRPO); --no-length-norm:
     over the longest possible completion, the same for all (Dr. GRPO, Liu et al. 2025)"""
@@ -161,7 +162,7 @@ class Config(cli.OutputFlags):
     """no GRPO: go on imitating the same noisy labels (a control that never sees the
     verifier), for more_labels_steps steps"""
     more_labels_steps: int = 2500
-    """--more-labels: the extra supervised steps (about as long as GRPO's phase, in seconds)"""
+    """--more-labels: the extra supervised steps (they take about as long as GRPO's phase)"""
     start_from: str | None = None
     """a saved run (its folder or model.pt) whose model stands in for the supervised phase:
     GRPO, --rft and --more-labels from one supervised model (the seed and the model's shape
