@@ -1146,8 +1146,11 @@ def dqn_mistakes(double):
          y(right, not_done=t(0.0, 0.0, 1.0))),
         (tr("gamma left out", "漏了 gamma"), y(right, gamma=1.0)),
         (tr("a (B, 1) next-state value (keepdim or gather without squeeze(-1)): y broadcasts "
-            "to (B, B) against Q(s, a)", "下一状态的价值是 (B, 1)（keepdim，或 gather 之后没有 "
-            "squeeze(-1)）：y 和 Q(s, a) 广播成了 (B, B)"), y((sum(right) / 3,) * 3))]
+            "to (B, B) against Q(s, a), so each row's Q(s, a) is pulled toward r + gamma * "
+            "not_done * (the mean of the B next-state values): the B numbers above",
+            "下一状态的价值是 (B, 1)（keepdim，或 gather 之后没有 squeeze(-1)）：y 和 Q(s, a) "
+            "广播成了 (B, B)，于是每一行的 Q(s, a) 都被拉向 r + gamma * not_done * （B 个下一状态"
+            "价值的平均），就是上面那 B 个数"), y((sum(right) / 3,) * 3))]
     if double:
         found.append((tr("max_a Q'(s', a), DQN's target, where --double asks for Double DQN's "
                          "Q'(s', argmax_a Q(s', a))", "用了 DQN 的 max_a Q'(s', a)，--double 要的是 "
@@ -1176,7 +1179,9 @@ def check_dqn_target(fn):
             if got is None:
                 raise Failed(tr("no gradient reached Q(s, a): the lines after the blank must stay "
                                 "as they are", "梯度没有传到 Q(s, a)：空白后面的代码要保持原样"))
-            compare("y", got, expected)
+            compare(tr("y (the target each row's Q(s, a) is pulled toward, read from the loss's "
+                       "gradient)", "y（每一行的 Q(s, a) 被拉向的目标，从损失的梯度读出）"),
+                    got, expected)
             if q_target.table.grad is not None and q_target.table.grad.abs().max() > 0:
                 raise Failed(tr("a gradient reached the target network Q': the target is a "
                                 "constant (torch.no_grad())", "梯度传进了目标网络 Q'：目标是常数"
@@ -2297,13 +2302,14 @@ def main(argv=None):
         "\n提示用的语言；不写时看系统语言：LANG 等以 zh 开头就用中文，否则用英文")))
     args = parser.parse_args(argv)
     LANG = args.lang or locale_lang()
+    again = f" --lang {args.lang}" if args.lang else ""  # a suggested command keeps --lang
     if args.name:
         passed = check(args.name, learning=not args.no_learning)
         if passed and args.no_learning:  # say so: all-pass lines alone read as if (c) passed too
             print(line(args.name, stage_names()[2], tr("not run (--no-learning)",
                                                        "没有跑（加了 --no-learning）"),
-                       tr(f"python exercises/check.py {args.name} runs it",
-                          f"要跑这一关，运行 python exercises/check.py {args.name}")))
+                       tr(f"python exercises/check.py {args.name}{again} runs it",
+                          f"要跑这一关，运行 python exercises/check.py {args.name}{again}")))
         sys.exit(0 if passed else 1)
     all_passed = True
     fail = tr("FAIL", "未通过")
@@ -2318,8 +2324,9 @@ def main(argv=None):
         if name in BUGS and not passed:  # where it fails would give the bug away
             verdict = tr("not fixed yet", "还没改好")
         print(f"{name:20} {verdict}", flush=True)
-    print(tr("(stage (c), learning, runs one exercise at a time: python exercises/check.py NAME)",
-             "（第 (c) 关要训练，一次只查一个练习：python exercises/check.py 练习名）"))
+    print(tr("(stage (c), learning, runs one exercise at a time: "
+             f"python exercises/check.py NAME{again})",
+             f"（第 (c) 关要训练，一次只查一个练习：python exercises/check.py 练习名{again}）"))
     # exit status 0 only when every exercise passed (a) and (b): scripts and tests can rely on it
     sys.exit(0 if all_passed else 1)
 

@@ -35,6 +35,16 @@ def dqn_update(q_net, q_target, optimizer, batch, cfg):
         next_max    = max_a Q'(s', a)                               (B,)
         next_double = Q'(s', argmax_a Q(s', a))                     (B,)
         y = reward + gamma * not_done * (next_double if cfg.double else next_max)
+
+    Returns (loss, mean Q(s, a), mean next_max, mean next_double), stacked.
+
+    在一个小批量上让 Q 朝 DQN 的目标走一个梯度步（cfg.double 为真时用 Double DQN 的目标）。
+    q_net(obs) 和 q_target(obs) 给出 (B, n_actions)，即 Q(s, .) 和 Q'(s, .)。batch 里有
+    obs (B, obs_dim)、action（(B,)，int64）、reward (B,)、next_obs (B, obs_dim) 和 not_done
+    （(B,)，即 1 - terminated）；还要用到 cfg.gamma、cfg.double 和 cfg.max_grad_norm。
+    两种下一状态的价值都要算出来并记进日志（inside.png），不管目标用的是哪一种：
+    next_max 和 next_double 的形状都是 (B,)，公式见上。y 的形状也是 (B,)，和 Q(s, a) 一一对应。
+    返回值是把 (loss, Q(s, a) 的均值, next_max 的均值, next_double 的均值) 叠在一起的张量。
     """
     obs, action, reward, next_obs, not_done = batch
     with torch.no_grad():  # the target is a constant: no gradient flows into it

@@ -2,8 +2,10 @@
 al. 2018, eq. 10, section 5.3 and Algorithm 1).
 
 From the TD3 paper (the tutorials stop at DDPG): the target action is the target actor's,
-smoothed with clipped Gaussian noise, a~ = mu'(s') + clip(eps, -c, c), eps ~ N(0, sigma),
-kept inside the action box; the target takes the smaller of the two target critics at it,
+smoothed with clipped Gaussian noise and kept inside the action box,
+a~ = clip(mu'(s') + clip(eps, -c, c) * half_width, low, high), eps ~ N(0, sigma) (a~ is the
+docs' ã, the noisy target action; sigma and c are in units of half_width); the target takes
+the smaller of the two target critics at it,
 y = r + gamma * (1 - terminated) * min(Q1'(s', a~), Q2'(s', a~)). The lines after the blank
 are the script's own.
 
@@ -12,8 +14,10 @@ The reference answer: td3_walker.update_critics (td3_walker.py).
 
 练习：TD3 评论员的目标，即裁剪双 Q 学习加目标策略平滑（Fujimoto 等 2018 的式 10、第 5.3 节
 和算法 1）。
-目标动作是目标演员的动作加上裁剪过的高斯噪声，a~ = mu'(s') + clip(eps, -c, c)，eps ~ N(0, sigma)，
-再限制在动作范围内；目标取两个目标评论员在 a~ 处较小的估计：
+目标动作是目标演员的动作加上裁剪过的高斯噪声，再限制在动作范围内：
+a~ = clip(mu'(s') + clip(eps, -c, c) * half_width, low, high)，eps ~ N(0, sigma)。
+a~ 就是文档里的 ã，即加了噪声的目标动作；sigma 和 c 都以 half_width 为单位。
+目标取两个目标评论员在 a~ 处较小的估计：
 y = r + gamma * (1 - terminated) * min(Q1'(s', a~), Q2'(s', a~))。空白后面的代码和脚本里的一样。
 参考答案：td3_walker.update_critics。
 """
