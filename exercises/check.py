@@ -1147,10 +1147,10 @@ def dqn_mistakes(double):
         (tr("gamma left out", "漏了 gamma"), y(right, gamma=1.0)),
         (tr("a (B, 1) next-state value (keepdim or gather without squeeze(-1)): y broadcasts "
             "to (B, B) against Q(s, a), so each row's Q(s, a) is pulled toward r + gamma * "
-            "not_done * (the mean of the B next-state values): the B numbers above",
+            "not_done * (the mean of the B next-state values): the numbers after \"got\" above",
             "下一状态的价值是 (B, 1)（keepdim，或 gather 之后没有 squeeze(-1)）：y 和 Q(s, a) "
             "广播成了 (B, B)，于是每一行的 Q(s, a) 都被拉向 r + gamma * not_done * （B 个下一状态"
-            "价值的平均），就是上面那 B 个数"), y((sum(right) / 3,) * 3))]
+            "价值的平均），就是上面“得到的是”后面那几个数"), y((sum(right) / 3,) * 3))]
     if double:
         found.append((tr("max_a Q'(s', a), DQN's target, where --double asks for Double DQN's "
                          "Q'(s', argmax_a Q(s', a))", "用了 DQN 的 max_a Q'(s', a)，--double 要的是 "
