@@ -135,6 +135,13 @@ class Config(cli.OutputFlags):
     """answers sampled per held-out prompt at each check"""
     eval_every: int = 10
     """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
+    # --- the shared flags, as they read here ---
+    eval: str | None = None
+    """a saved run's model.pt or folder: skip training, print 6 sampled answers to each of 6
+    held-out sums with the judge's hidden score, and the held-out true score and accuracy (the
+    PPO policy, and the DPO model if one was trained)"""
+    eval_seed: int = 10_000
+    """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
     def __post_init__(self):
         cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
