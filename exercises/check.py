@@ -1681,6 +1681,10 @@ def gae_mistakes(r, v, nv, term, trunc, gamma, lam):
             (tr("lam left out of the sum (gamma * A_{t+1}, not gamma * lam * A_{t+1})",
                 "累加时漏了 lam（写成了 gamma * A_{t+1}，应该是 gamma * lam * A_{t+1}）"),
              gae_with(r, v, nv, term, trunc, gamma, 1.0)),
+            (tr("gamma * lam left out of the sum (A_t = delta_t + A_{t+1}: tutorial 000's bug)",
+                "累加时整个漏了 gamma * lam（写成了 A_t = delta_t + A_{t+1}：这正是教程 000 的错误，"
+                "见 README.zh-CN.md 路线一第 3 步）"),
+             gae_with(r, v, nv, term, trunc, gamma, 1.0 / gamma)),
             (tr("V(s_t) where V(s_{t+1}) belongs in delta (values[t], not next_values[t])",
                 "delta 里用了 V(s_t)，应该是 V(s_{t+1})（用了 values[t]，不是 next_values[t]）"),
              gae_with(r, v, nv, term, trunc, gamma, lam, next_v=False)),

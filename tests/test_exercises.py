@@ -92,6 +92,14 @@ WRONG = {
     "gae": [
         ("""def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
                 adv, last = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
+                for t in reversed(range(len(rewards))):  # tutorial 000: no gamma * lam
+                    nt = (~terminated[t]).float()
+                    nd = (~(terminated[t] | truncated[t])).float()
+                    delta = rewards[t] + gamma * next_values[t] * nt - values[t]
+                    last = adv[t] = delta + nd * last
+                return adv""", "(a)", "gamma * lam left out of the sum"),
+        ("""def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
+                adv, last = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
                 for t in reversed(range(len(rewards))):  # a truncation as a termination
                     done = (terminated[t] | truncated[t]).float()
                     delta = rewards[t] + gamma * next_values[t] * (1 - done) - values[t]
