@@ -26,7 +26,7 @@ curve.png, inside.png, and checkpoint.pt, from which --resume continues the run 
 中文导读：TD3（双延迟深度确定性策略梯度）是在 DDPG 上加的三处修改，用来抑制 DDPG 评论员对
 Q 值的高估：一、裁剪双 Q 学习：两个评论员，TD 目标取两个目标评论员估计中较小的一个；
 二、延迟策略更新：评论员每更新 policy_delay 次，演员和目标网络才更新一次；三、目标策略
-平滑：计算目标时给 μ'(s') 加上裁剪过的高斯噪声。其余部分与 ddpg_walker.py 相同，建议先读
+平滑：计算目标时给 μ′(s′) 加上裁剪过的高斯噪声。其余部分与 ddpg_walker.py 相同，建议先读
 DDPG（教程 003 与 README.zh-CN.md 的路线三），再用 diff 对照这三处修改。
 """
 

@@ -8,9 +8,10 @@ is minus its mean. The lines around the blank are the script's own.
     python exercises/check.py clipped_surrogate
 The reference answer: ppo_cartpole.compute_loss_pi (ppo_cartpole.py).
 
-练习：PPO 的裁剪目标（Schulman 等 2017 的式 7）。对照教程 001 的 PPO2 和教程 002 的
-compute_loss_pi。比值 r_t = pi(a|s) / pi_old(a|s)；min(r A, clip(r, 1 - eps, 1 + eps) A)，
-损失是它的均值取负。空白前后的代码和脚本里的一样。参考答案：ppo_cartpole.compute_loss_pi。
+练习：PPO 的裁剪代理目标函数（Schulman 等 2017 的式 7）。对照教程 001 的 PPO2 和教程 002 的
+compute_loss_pi。比值 r_t = pi(a|s) / pi_old(a|s) 给 pi_old 采到的样本重新加权；
+min(r A, clip(r, 1 - eps, 1 + eps) A) 的作用是：一个样本的比值朝它的优势希望的方向越出区间以后，
+就不再奖励它。损失是它的均值取负。空白前后的代码和脚本里的一样。参考答案：ppo_cartpole.compute_loss_pi。
 """
 
 import torch
@@ -26,7 +27,7 @@ def compute_loss_pi(policy, data, clip_coef):
         loss_pi = -L_CLIP     (eps = clip_coef)
 
     在一批数据上返回 (loss_pi, entropy, info)：data["obs"]、["act"]、["adv"] 和 ["logp"]（所选动作
-    的 log pi_old(a|s)），每个样本一行。公式见上：r_t 是比值，L_CLIP 是裁剪代理目标在批量上的均值，
+    的 log pi_old(a|s)），每个样本一行。公式见上：r_t 是比值，L_CLIP 是裁剪代理目标函数在这批数据上的均值，
     loss_pi = -L_CLIP（eps 就是 clip_coef）。
     """
     obs, act, adv, logp_old = data["obs"], data["act"], data["adv"], data["logp"]
