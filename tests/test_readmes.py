@@ -7,6 +7,7 @@ import dataclasses
 import importlib
 import importlib.util
 import re
+import statistics
 import string
 
 import pytest
@@ -295,6 +296,14 @@ def test_results_dqn_figures_come_from_the_committed_records(path, heading):
     shown = [line for line in printed if line.startswith("| ")]  # header and seed rows
     for row in shown if path == RESULTS else [r for r in shown if re.match(r"\| \d", r)]:
         assert row in lines, f"{path.name}'s DQN section lacks the table row {row!r}"
+    with open(ROOT / "benchmarks" / "results" / "dqn_heldout_seeds.csv", newline="") as f:
+        held = {r["seed"]: r for r in csv.DictReader(f)}  # seeds 5-9, no default chosen on them
+    assert sorted(held) == ["5", "6", "7", "8", "9"] and all(r["solved_step"] for r in held.values())
+    steps = [int(held[s]["solved_step"]) for s in sorted(held)]
+    at = section.find("dqn_heldout_seeds.csv")  # the seeds' steps, in order, after its name
+    for n in steps + [statistics.median(steps)]:
+        assert section.find(f"{n:,.0f}", at) > at, f"{path.name}: no {n:,.0f} for seeds 5-9"
+        at = section.find(f"{n:,.0f}", at)
     if path == RESULTS:  # the summary in English; the Chinese page says it in Chinese
         for summary in [line for line in printed if not line.startswith("|")]:
             assert summary in " ".join(section.split()), f"docs/results.md lacks {summary!r}"
