@@ -532,8 +532,8 @@ def main(argv=None):
         _, held_out = split_pairs(run_cfg.digits, run_cfg.eval_prompts,
                                   np.random.default_rng(run_cfg.seed))  # the run's own split
         lines = completions(model, run_cfg, held_out)
-        print(f"{len(lines)} held-out prompts, each with {run_cfg.group_size} sampled answers "
-              "(. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
+        print(f"{cfg.eval}: {len(lines)} held-out prompts, {run_cfg.group_size} sampled answers "
+              "each (. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
         pass1, passG = evaluate(model, held_out, run_cfg)
         print(f"held-out ({len(held_out)} prompts): pass@1 {pass1:.3f}, "
               f"pass@{run_cfg.group_size} {passG:.3f}", flush=True)

@@ -514,6 +514,7 @@ def main(argv=None):
         if not cfg.eval:
             return report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
+        print(f"{cfg.eval}:", flush=True)  # the run evaluated (runs/latest: the newest)
         c = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
         P, gen = 2 * c.digits + 2, torch.Generator().manual_seed(c.eval_seed)

@@ -256,7 +256,7 @@ def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
     assert last > first, (first, last)
     p = run_script("grpo_addition.py", "--eval", run, timeout=120)
     assert p.returncode == 0 and "held-out (100 prompts): pass@1" in p.stdout, p.stderr
-    assert p.stdout.startswith("8 held-out prompts, each with 8 sampled answers"), p.stdout
+    assert p.stdout.startswith(f"{run}: 8 held-out prompts, 8 sampled answers each"), p.stdout
 
 
 def test_same_seed_same_log(tmp_path):
