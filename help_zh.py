@@ -21,9 +21,11 @@ def wanted(argv):
 
 
 def chinese_locale():
-    """Whether the locale (LC_ALL, else LC_MESSAGES, else LANG) is Chinese."""
+    """Whether the locale (LC_ALL, else LC_MESSAGES, else LANG: the first one set) is Chinese
+    (zh_CN.UTF-8 and the like, in either case). exercises/check.py asks it too."""
     env = os.environ
-    return (env.get("LC_ALL") or env.get("LC_MESSAGES") or env.get("LANG", "")).startswith("zh")
+    return (env.get("LC_ALL") or env.get("LC_MESSAGES") or env.get("LANG", "")).lower().startswith(
+        "zh")
 
 
 def flags(script, module=None):

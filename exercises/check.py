@@ -27,7 +27,6 @@ import importlib.util
 import inspect
 import io
 import math
-import os
 import sys
 import tempfile
 import time
@@ -44,6 +43,7 @@ import torch.nn.functional as F  # noqa: E402
 from torch.distributions import Categorical, kl_divergence  # noqa: E402  (the mistakes' values)
 
 import common  # noqa: E402
+import help_zh  # noqa: E402
 from lab import DDPG_IN_MINUTES, swapped  # noqa: E402
 
 NOT_WRITTEN = "not written yet"
@@ -54,10 +54,7 @@ LANG = "en"
 
 
 def locale_lang():
-    for var in ("LC_ALL", "LC_MESSAGES", "LANG"):
-        if os.environ.get(var):
-            return "zh" if os.environ[var].lower().startswith("zh") else "en"
-    return "en"
+    return "zh" if help_zh.chinese_locale() else "en"  # the scripts' --help reads it alike
 
 
 def tr(en, zh):
@@ -2276,8 +2273,6 @@ def check(name, fn=None, learning=True, say=print):
 
 def ChineseHelp(prog):
     """The scripts' --help-zh layout (help_zh.py: Chinese wrapped by columns), no defaults."""
-    import help_zh
-
     class Layout(help_zh.HelpFormatter):
         def _get_help_string(self, action):
             return action.help
