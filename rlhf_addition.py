@@ -323,8 +323,9 @@ def shift_to_zero(rm, seqs, P):
     std). Returns r on those answers before the shift, and the shift."""
     with torch.no_grad():
         r_sft = sequence_score(rm, seqs, P)
-        rm.head.bias -= r_sft.mean()
-    return r_sft, r_sft.mean()
+        shift = r_sft.mean()
+        rm.head.bias -= shift
+    return r_sft, shift
 
 
 def critic_start(cfg, reference, rm):
