@@ -100,17 +100,14 @@ class TinyGPT(nn.Module):
 
 @dataclass
 class Config(cli.OutputFlags):
-    """The task's and the algorithm's settings; the flags every script shares (--run-dir,
-    --eval, --threads, ...) come from cli.OutputFlags."""
+    """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
     UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda")  # no env, no GPU code
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 3
-    """digits of each number to add (3: 147+238=0385.); with 3, a million sums: the model
-    cannot learn them by heart, it has to learn to add"""
+    """digits of each number to add (3: 147+238=0385.; a million sums: too many to memorise)"""
     label_noise: float = 0.5
-    """share of the supervised examples whose label drops the carry out of the ones digit
-    (147+238=0375.), where there is one"""
+    """share of supervised labels that drop the ones digit's carry, where there is one (0375.)"""
     # --- the model ---
     n_layer: int = 2
     """transformer blocks"""
@@ -120,9 +117,7 @@ class Config(cli.OutputFlags):
     """attention heads"""
     # --- supervised phase ---
     sft_steps: int = 3000
-    """steps of supervised learning (cross-entropy on the answer tokens); held-out pass@1
-    sits near 0, then rises fast, at a step that differs by seed (a run that ends mid-rise
-    says so: docs/ppo_to_grpo.md)"""
+    """supervised steps (cross-entropy on the answers); when pass@1 rises differs by seed"""
     sft_batch: int = 128
     """examples per supervised step"""
     sft_lr: float = 1e-3
@@ -137,40 +132,31 @@ class Config(cli.OutputFlags):
     update_epochs: int = 2
     """gradient steps on each batch of completions (DeepSeekMath's mu)"""
     learning_rate: float = 1e-4
-    """Adam step size of the GRPO phase (3e-4: seed 1 of 5 collapsed, the KL jumping to 2 in
-    a few steps; docs/ppo_to_grpo.md)"""
+    """Adam step size of the GRPO phase (3e-4: one seed in five collapsed; docs/ppo_to_grpo.md)"""
     clip_coef: float = 0.2
     """epsilon of the per-token clipped ratio, as in PPO-clip"""
     beta: float = 0.04
     """weight of the KL penalty to the supervised model (DeepSeekMath: 0.04)"""
     scale_rewards: bool = True
-    """divide each advantage by its group's std (GRPO); --no-scale-rewards: Dr. GRPO's choice
-    (Liu et al. 2025's two fixes to GRPO: this one and --no-length-norm)"""
+    """divide each advantage by its group's std (GRPO); --no-scale-rewards: Dr. GRPO"""
     length_norm: bool = True
-    """average each completion's token losses over its own length (GRPO); --no-length-norm:
-    over the longest possible completion, the same for all (Dr. GRPO, Liu et al. 2025)"""
+    """average each answer's token losses over its own length (GRPO); --no-length-norm: Dr. GRPO"""
     eval_prompts: int = 500
     """held-out prompts for pass@1 and pass@G (G = group_size samples each)"""
     eval_every: int = 250
     """supervised steps between two held-out checks (GRPO: a tenth of it) on 100 prompts"""
     # --- the two baselines, in GRPO's place ---
     rft: bool = False
-    """rejection-sampling fine-tuning instead of GRPO: the same prompts, the same G sampled
-    answers each, the same verifier, optimizer and step size; cross-entropy on the answers
-    the verifier accepts, the others dropped (the fair baseline: the same information)"""
+    """instead of GRPO, rejection-sampling fine-tuning: imitate the samples the verifier accepts"""
     more_labels: bool = False
-    """no GRPO: go on imitating the same noisy labels (a control that never sees the
-    verifier), for more_labels_steps steps"""
+    """no GRPO: more_labels_steps more steps on the same noisy labels (never sees the verifier)"""
     more_labels_steps: int = 2500
-    """--more-labels: the extra supervised steps (they take about as long as GRPO's phase)"""
+    """--more-labels: the extra supervised steps (about as long as GRPO's phase)"""
     start_from: str | None = None
-    """a saved run (its folder or model.pt) whose model stands in for the supervised phase:
-    GRPO, --rft and --more-labels from one supervised model (the seed and the model's shape
-    must be the run's)"""
+    """a saved run (its folder or model.pt): its model stands in for the supervised phase"""
     # --- the shared flags, as they read here ---
     eval: str | None = None
-    """a saved model (model.pt) or its run folder: skip training, print its answers to 8
-    held-out sums and its held-out pass@1 and pass@G"""
+    """model.pt or its run folder: no training; print its answers, held-out pass@1 and pass@G"""
     eval_seed: int = 10_000
     """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
@@ -178,17 +164,14 @@ class Config(cli.OutputFlags):
         super().__post_init__()
         cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", grpo_steps=">= 0",
-                         prompts="> 0", group_size="> 1", update_epochs="> 0",
-                         learning_rate="> 0", clip_coef="> 0", beta=">= 0",
-                         eval_prompts="> 0", label_noise="[0, 1]", more_labels_steps=">= 0",
-                         eval_every="> 0")
+                         prompts="> 0", group_size="> 1", update_epochs="> 0", beta=">= 0",
+                         learning_rate="> 0", clip_coef="> 0", eval_prompts="> 0",
+                         label_noise="[0, 1]", more_labels_steps=">= 0")
+        cli.check(self.eval_every >= 10, f"--eval-every must be at least 10, got {self.eval_every}")
         cli.check(not (self.rft and self.more_labels), "--rft and --more-labels each take "
                   "GRPO's place: pass one")
-        cli.check(not self.cuda, "--cuda: this script has no GPU code (its model is tiny): it "
-                  "runs on the CPU")
-        cli.check(self.eval_every >= 10, f"--eval-every must be at least 10, got {self.eval_every}")
-        cli.check(not (self.gif or self.watch), "--gif and --watch play an env, and this task "
-                  "has none: --eval prints the saved model's answers")
+        cli.check(not (self.gif or self.watch or self.cuda), "--gif and --watch play an env, and "
+                  "this task has none (--eval prints the answers); --cuda: no GPU code here")
         cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
                   f"multiple of --n-head ({self.n_head})")
 
