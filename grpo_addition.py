@@ -28,9 +28,8 @@ PPO line. The run, top to bottom:
 """
 
 import copy
-import dataclasses
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -108,14 +107,12 @@ class Config(cli.OutputFlags):
     """digits of each number to add (3: 147+238=0385.; a million sums: too many to memorise)"""
     label_noise: float = 0.5
     """share of supervised labels that drop the ones digit's carry, where there is one (0375.)"""
-    # --- the model ---
     n_layer: int = 2
     """transformer blocks"""
     d_model: int = 64
     """width of the embeddings"""
     n_head: int = 4
     """attention heads"""
-    # --- supervised phase ---
     sft_steps: int = 3000
     """supervised steps (cross-entropy on the answers); when pass@1 rises differs by seed"""
     sft_batch: int = 128
@@ -144,8 +141,7 @@ class Config(cli.OutputFlags):
     eval_prompts: int = 500
     """held-out prompts for pass@1 and pass@G (G = group_size samples each)"""
     eval_every: int = 250
-    """supervised steps between two held-out checks (GRPO: a tenth of it) on 100 prompts"""
-    # --- the two baselines, in GRPO's place ---
+    """supervised steps between held-out checks on 100 prompts (GRPO: a tenth of it, at least 1)"""
     rft: bool = False
     """instead of GRPO, rejection-sampling fine-tuning: imitate the samples the verifier accepts"""
     more_labels: bool = False
@@ -154,8 +150,7 @@ class Config(cli.OutputFlags):
     """--more-labels: the extra supervised steps (about as long as GRPO's phase)"""
     start_from: str | None = None
     """a saved run (its folder or model.pt): its model stands in for the supervised phase"""
-    # --- the shared flags, as they read here ---
-    eval: str | None = None
+    eval: str | None = None  # this and eval_seed: the shared flags, as they read here
     """model.pt or its run folder: no training; print its answers, held-out pass@1 and pass@G"""
     eval_seed: int = 10_000
     """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
@@ -165,11 +160,9 @@ class Config(cli.OutputFlags):
         cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
                          sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", grpo_steps=">= 0",
                          prompts="> 0", group_size="> 1", update_epochs="> 0", beta=">= 0",
-                         learning_rate="> 0", clip_coef="> 0", eval_prompts="> 0",
+                         learning_rate="> 0", clip_coef="> 0", eval_prompts="> 0", eval_every="> 0",
                          label_noise="[0, 1]", more_labels_steps=">= 0")
-        cli.check(self.eval_every >= 10, f"--eval-every must be at least 10, got {self.eval_every}")
-        cli.check(not (self.rft and self.more_labels), "--rft and --more-labels each take "
-                  "GRPO's place: pass one")
+        cli.check(not (self.rft and self.more_labels), "--rft, --more-labels: pass one, not both")
         cli.check(not (self.gif or self.watch or self.cuda), "--gif and --watch play an env, and "
                   "this task has none (--eval prints the answers); --cuda: no GPU code here")
         cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
@@ -188,6 +181,11 @@ def answer_of(a, b, digits, drop_carry=False):
     digit forgotten (the supervised data's mistake)."""
     total = a + b - (10 if drop_carry and a % 10 + b % 10 >= 10 else 0)
     return f"{total:0{digits + 1}d}."
+
+
+def lengths(digits):
+    """Tokens in a prompt and in an answer: "147+238=" is 2 * digits + 2, "0385." digits + 2."""
+    return 2 * digits + 2, digits + 2
 
 
 def reward(prompt, completion, digits):
@@ -279,7 +277,8 @@ def grpo_loss(logp, logp_old, logp_ref, adv, mask, cfg):
     with torch.no_grad():
         n = mask.sum()
         info = dict(kl=((kl * mask).sum() / n).item(),
-                    clipfrac=((((ratio - 1).abs() > cfg.clip_coef).float() * mask).sum() / n).item(),
+                    clipfrac=((((ratio - 1).abs() > cfg.clip_coef).float() * mask).sum()
+                              / n).item(),
                     ratio=ratio[mask > 0].detach())
     return loss, info
 
@@ -290,12 +289,21 @@ def sft_loss(model, seqs, P):
     return F.cross_entropy(logits.reshape(-1, logits.shape[-1]), seqs[:, P:].reshape(-1))
 
 
+def supervised_step(model, opt, seqs, P):
+    """One supervised step on whole answers: sft_loss, then one step of `opt`."""
+    loss = sft_loss(model, seqs, P)
+    opt.zero_grad()
+    loss.backward()
+    opt.step()
+    return loss
+
+
 @torch.no_grad()
 def evaluate(model, pairs, cfg):
     """pass@1 (the share of right samples) and pass@G (the share of prompts with at least one
     right sample among G), over held-out prompts, sampling at temperature 1 from a generator
     of its own (seeded with eval_seed: training's draws are not shifted)."""
-    P, L = 2 * cfg.digits + 2, cfg.digits + 2
+    P, L = lengths(cfg.digits)
     prompts = torch.tensor([encode(prompt_of(a, b, cfg.digits)) for a, b in pairs])
     generator = torch.Generator().manual_seed(cfg.eval_seed)
     seqs = sample(model, prompts.repeat_interleave(cfg.group_size, 0), L, generator)
@@ -306,7 +314,7 @@ def evaluate(model, pairs, cfg):
 
 def completions(model, cfg, held_out, n=8):
     """G completions of each of the first n held-out prompts, "x" after a wrong one."""
-    P, L, gen = 2 * cfg.digits + 2, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed)
+    (P, L), gen = lengths(cfg.digits), torch.Generator().manual_seed(cfg.eval_seed)
     lines = []
     for a, b in held_out[:n]:
         prompt = prompt_of(a, b, cfg.digits)
@@ -317,23 +325,19 @@ def completions(model, cfg, held_out, n=8):
     return lines
 
 
-# What each step logs, once: progress.csv's columns, each with its format on the progress line
-# (None: only in the CSV) and what it is. A supervised step measures only loss (and pass1).
+# progress.csv's columns, once: (progress-line format or None, picture label)
 LOGGED = dict(loss=(".4f", "loss"), reward=(".3f", "reward of the samples"),
               flat_groups=(".2f", "groups with equal rewards (no signal)"),
               kl=(".4f", "KL(pi || pi_ref), k3"), clipfrac=(".3f", "clipfrac"),
               length=(None, "answer length"), pass1=(".3f", "held-out pass@1 (100 sums)"))
-NO_GRPO = dict.fromkeys(("loss", "reward", "flat_groups", "kl", "clipfrac", "length"))  # None: unmeasured
+NO_GRPO = dict.fromkeys(LOGGED)  # a supervised step's row: its loss and pass1, the rest None
+SMOKE = dict(digits=1, sft_steps=30, grpo_steps=10, eval_every=10, eval_prompts=10,  # the tests':
+             n_layer=1, d_model=16)  # seconds, every file
 
-# A run of seconds that still writes every file: the tests' smoke run (tests/test_every_script.py)
-SMOKE = dict(digits=1, sft_steps=30, grpo_steps=10, eval_every=10, eval_prompts=10,
-             n_layer=1, d_model=16)
 
 def saved_start(cfg):
-    """--start-from: the saved run's weights, refused in one line where its seed (and so its
-    held-out sums) or its model's shape differ from cfg's; read before the run folder is made."""
-    saved = checkpoints.load_checkpoint(cfg.start_from, script=SCRIPT,
-                                        required=("model", "config"))
+    """--start-from: the saved model, refused where its seed (its held-out sums) or shape differ."""
+    saved = checkpoints.load_checkpoint(cfg.start_from, script=SCRIPT, required=("model", "config"))
     for name in ("seed", "digits", "eval_prompts", "n_layer", "d_model", "n_head"):
         flag, value = "--" + name.replace("_", "-"), saved["config"].get(name)
         if value != getattr(cfg, name):
@@ -345,16 +349,16 @@ def saved_start(cfg):
 # ==== Training ============================================================================
 
 
-def rft_steps(supervised_step, opt, seqs, rewards, logp_old, logp_ref, mask, cfg):
+def rft_steps(model, opt, seqs, rewards, logp_old, logp_ref, mask, cfg):
     """--rft, the baseline: on GRPO's own samples, update_epochs supervised steps on the
     answers the verifier accepts (none accepted: no step, no loss). The KL to pi_ref (k3) is
     logged only. Returns (the last loss or None, GRPO's info without a ratio)."""
     kept = seqs[rewards > 0]  # a right answer is exactly L tokens: no padding
     loss = None
     for _ in range(cfg.update_epochs if len(kept) else 0):
-        loss = supervised_step(opt, kept)
+        loss = supervised_step(model, opt, kept, lengths(cfg.digits)[0])  # P, the prompt's length
     k3 = torch.exp(logp_ref - logp_old) - (logp_ref - logp_old) - 1  # D, logged only
-    return loss, dict(kl=((k3 * mask).sum() / mask.sum()).item(), clipfrac=None, ratio=None)
+    return loss, dict(kl=((k3 * mask).sum() / mask.sum()).item(), clipfrac=None)
 
 
 def note_if_still_rising(checks, cfg):
@@ -371,19 +375,19 @@ def note_if_still_rising(checks, cfg):
 
 
 def train(cfg: Config):
-    """Supervise, then GRPO (or, in its place, --rft or --more-labels). Returns a dict:
-    run_dir, before and after (held-out pass@1 and pass@G after each phase), reference (pi_ref,
-    the KL's anchor), interrupted."""
-    start = saved_start(cfg) if cfg.start_from else None
+    """Supervise, then GRPO (or, in its place, --rft or --more-labels). Returns a dict: run_dir,
+    before and after (held-out pass@1, pass@G), reference (pi_ref, the KL's anchor), interrupted."""
+    start = saved_start(cfg) if cfg.start_from else None  # a refusal leaves no folder behind
     torch.manual_seed(cfg.seed)  # the model's init
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
     train_pairs, held_out = split_pairs(cfg.digits, cfg.eval_prompts, rng)
-    P, L = 2 * cfg.digits + 2, cfg.digits + 2  # prompt and answer lengths, in tokens
+    P, L = lengths(cfg.digits)  # prompt and answer lengths, in tokens
     model = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")  # progress.csv
     held = lambda n=len(held_out): evaluate(model, held_out[:n], cfg)  # noqa: E731
-    result = dict(run_dir=run.dir, before=None, after=None, samples={}, reference=None)
+    result = dict(run_dir=run.dir, before=None, after=None, reference=None)
+    samples = dict(before=[], after=[])  # answers to 8 held-out sums, for inside.png
     second = "rft" if cfg.rft else "more_labels" if cfg.more_labels else "grpo"  # phase 2's name
 
     def supervised_batch():  # prompt + answer, the answer's carry dropped in label_noise of them
@@ -393,13 +397,6 @@ def train(cfg: Config):
                                     + answer_of(*train_pairs[i], cfg.digits, drop))
                              for i, drop in zip(picks, noisy)])
 
-    def supervised_step(opt, seqs):  # one step of cross-entropy on whole answers
-        loss = sft_loss(model, seqs, P)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        return loss
-
     # Ctrl-C ends training; either way, model.pt is saved as training left it. progress.csv
     # numbers its rows on across the phases: the second phase's step k is row sft_steps + k.
     with run.saving_model(dict(model=model)):
@@ -408,7 +405,7 @@ def train(cfg: Config):
         opt = torch.optim.Adam(model.parameters(), lr=cfg.sft_lr)
         checks = []  # held-out pass@1 (100 sums) every eval_every steps
         for step in range(1, sft_steps + 1):
-            loss = supervised_step(opt, supervised_batch())
+            loss = supervised_step(model, opt, supervised_batch(), P)
             run.global_step = step
             if step % cfg.eval_every == 0:  # the same columns as GRPO's rows: theirs are None
                 checks.append(held(100)[0])
@@ -417,7 +414,7 @@ def train(cfg: Config):
         if start:
             model.load_state_dict(start)  # --start-from: a supervised model saved before
         result["before"] = held()  # what GRPO (or a baseline) starts from
-        result["samples"]["before"] = completions(model, cfg, held_out)
+        samples["before"] = completions(model, cfg, held_out)
         print(f"supervised{' (' + str(cfg.start_from) + ')' if start else ''}: held-out "
               f"pass@1 {result['before'][0]:.3f}, pass@{cfg.group_size} {result['before'][1]:.3f}"
               f" (phase supervised took {time.time() - run.start_time:.0f} s); next, {second}: "
@@ -426,7 +423,7 @@ def train(cfg: Config):
 
         # --- the label control: more of the same supervision, never the verifier ---
         for step in range(1, (cfg.more_labels_steps if cfg.more_labels else 0) + 1):
-            loss = supervised_step(opt, supervised_batch())
+            loss = supervised_step(model, opt, supervised_batch(), P)
             run.global_step = sft_steps + step
             if step % cfg.eval_every == 0:
                 run.update(dict(NO_GRPO, loss=loss.item(), pass1=held(100)[0]), show=True)
@@ -446,8 +443,7 @@ def train(cfg: Config):
             with torch.no_grad():  # pi_old and pi_ref of every completion token, (B * G, L)
                 logp_old, logp_ref = token_logp(model, seqs, P), token_logp(reference, seqs, P)
             if cfg.rft:  # the baseline: the same samples and steps; imitate the right answers
-                loss, info = rft_steps(supervised_step, opt, seqs, rewards, logp_old, logp_ref,
-                                       mask, cfg)
+                loss, info = rft_steps(model, opt, seqs, rewards, logp_old, logp_ref, mask, cfg)
             else:
                 for _ in range(cfg.update_epochs):  # a few gradient steps on the same completions
                     loss, info = grpo_loss(token_logp(model, seqs, P), logp_old, logp_ref, adv,
@@ -457,35 +453,33 @@ def train(cfg: Config):
                     opt.step()
             run.global_step = sft_steps + step
             flat = (rewards.view(-1, cfg.group_size).std(1) == 0).float().mean().item()
-            checked = step % (cfg.eval_every // 10) == 0
+            checked = step % max(1, cfg.eval_every // 10) == 0
             run.update(dict(loss=None if loss is None else loss.item(),  # None: RFT, no step
-                            reward=rewards.mean().item(), flat_groups=flat, kl=info["kl"],
-                            clipfrac=info["clipfrac"], length=mask.sum(1).mean().item(),
-                            pass1=held(100)[0] if checked else None)
-                       | ({} if info["ratio"] is None else dict(ratio=info["ratio"])),
-                       show=checked)
-        result["after"], result["samples"]["after"] = held(), completions(model, cfg, held_out)
+                            reward=rewards.mean().item(), flat_groups=flat, **info,
+                            length=mask.sum(1).mean().item(),
+                            pass1=held(100)[0] if checked else None), show=checked)
+        result["after"], samples["after"] = held(), completions(model, cfg, held_out)
         print(f"after {second}: held-out pass@1 {result['after'][0]:.3f}, pass@{cfg.group_size} "
               f"{result['after'][1]:.3f} (phase {second} took {time.time() - phase_start:.0f} s)",
               flush=True)
-    report.draw_logged(run, pictures(cfg, sft_steps, result["samples"]))  # also after a Ctrl-C
+    report.draw_logged(run, pictures(cfg, sft_steps, samples))  # also after a Ctrl-C
+    if run.interrupted:  # main() then exits with 130
+        print(f"interrupted: {run.dir} holds model.pt as training left it, curve.png and "
+              "inside.png of what was logged", flush=True)
     return dict(result, interrupted=run.interrupted)
 
 
 def pictures(cfg, sft_steps, samples):
-    """curve.png: each phase on its own steps, held-out pass@1 in both; the reward, the KL to
-    pi_ref and the groups without signal in GRPO's, the cross-entropy in a baseline's.
-    inside.png: the per-token ratio at three GRPO updates against the clip band, and held-out
-    sums' answers before and after (x: wrong)."""
+    """curve.png: each phase on its own steps; inside.png: the per-token ratio at three GRPO
+    updates against the clip band, and held-out sums' answers before and after (x: wrong)."""
     second = "RFT" if cfg.rft else "more labels" if cfg.more_labels else "GRPO"
     first = dict(within=(1, sft_steps), xlabel="step")  # progress.csv's rows of each phase
     then = dict(within=(sft_steps + 1, np.inf), xlabel="step")
     baseline = cfg.rft or cfg.more_labels  # its loss is a cross-entropy; it keeps no ratio
     ratios = [] if baseline else [[plots.histograms("ratio", band=(1 - cfg.clip_coef,
                                                                    1 + cfg.clip_coef))]]
-    answers = [[plots.text(samples.get(when, []), f"{len(samples.get(when, []))} held-out "
-                           f"sums, {cfg.group_size} sampled answers each (x: wrong), {when} "
-                           f"{second}")] for when in ("before", "after")]
+    answers = [[plots.text(lines, f"{len(lines)} held-out sums, {cfg.group_size} sampled answers "
+                           f"each (x: wrong), {when} {second}")] for when, lines in samples.items()]
     return dict(curve=[[plots.lines("pass1", title="supervised", **first),
                         plots.lines("pass1", "reward", title=second, **then)],
                        [plots.lines("loss", title="cross-entropy", **first),
@@ -499,27 +493,17 @@ def main(argv=None):
     cfg = cli.parse_config(Config, argv, description=__doc__.split("\n\n")[0])
     with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         if not cfg.eval:
-            result = train(cfg)
-            if result["interrupted"]:
-                print(f"interrupted: {result['run_dir']} holds model.pt as training left it, "
-                      "curve.png and inside.png of what was logged", flush=True)
-                raise SystemExit(130)
-            return
-        saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
-        fields = {f.name for f in dataclasses.fields(Config)}
-        run_cfg = Config(**{**{k: v for k, v in saved["config"].items() if k in fields},
-                            "eval": None, "gif": None, "start_from": None})  # its task, its split
-        model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda c: TinyGPT(
-            run_cfg.n_layer, run_cfg.d_model, run_cfg.n_head,
-            (2 * run_cfg.digits + 2) + (run_cfg.digits + 2)))  # prompt + answer tokens
-        _, held_out = split_pairs(run_cfg.digits, run_cfg.eval_prompts,
-                                  np.random.default_rng(run_cfg.seed))  # the run's own split
-        lines = completions(model, run_cfg, held_out)
-        print(f"{cfg.eval}: {len(lines)} held-out prompts, {run_cfg.group_size} sampled answers "
-              "each (. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
-        pass1, passG = evaluate(model, held_out, run_cfg)
-        print(f"held-out ({len(held_out)} prompts): pass@1 {pass1:.3f}, "
-              f"pass@{run_cfg.group_size} {passG:.3f}", flush=True)
+            return report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
+        saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))["config"]
+        c = Config(**{f.name: saved[f.name] for f in fields(Config) if f.name in saved})  # its task
+        model, _ = checkpoints.load_model(cfg.eval, SCRIPT, "model", lambda _: TinyGPT(
+            c.n_layer, c.d_model, c.n_head, sum(lengths(c.digits))))  # prompt + answer tokens
+        _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
+        lines = completions(model, c, held_out)  # the run's own held-out sums
+        print(f"{cfg.eval}: {len(lines)} held-out prompts, {c.group_size} sampled answers each "
+              "(. ends an answer, x marks a wrong one):\n" + "\n".join(lines), flush=True)
+        print(f"held-out ({len(held_out)} prompts): pass@1 %.3f, pass@{c.group_size} %.3f"
+              % evaluate(model, held_out, c), flush=True)
 
 
 if __name__ == "__main__":
