@@ -135,9 +135,9 @@ class Config(cli.OutputFlags):
     beta: float = 0.04
     """weight of the KL penalty to the supervised model (DeepSeekMath: 0.04)"""
     scale_rewards: bool = True
-    """divide each advantage by its group's std (GRPO); --no-scale-rewards: Dr. GRPO"""
+    """divide each advantage by its group's std (GRPO); off: the mean subtracted only (Dr. GRPO)"""
     length_norm: bool = True
-    """average each answer's token losses over its own length (GRPO); --no-length-norm: Dr. GRPO"""
+    """average token losses over each answer's length (GRPO); off: over the longest (Dr. GRPO)"""
     eval_prompts: int = 500
     """held-out prompts for pass@1 and pass@G (G = group_size samples each)"""
     eval_every: int = 250
