@@ -47,9 +47,8 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 def with_scalar_head(model, d_model):
-    """A copy of `model` whose head gives one number per position instead of the next token's
-    logits: the reward model r(x, y) and the value network V(s) (InstructGPT: both start
-    from a trained transformer, with a new head). (B, T) ids -> (B, T, 1)."""
+    """A copy of `model` whose head gives one number per position, (B, T) -> (B, T, 1): the
+    reward model r(x, y) and the value network V(s) (InstructGPT: a trained transformer's)."""
     scalar = copy.deepcopy(model)
     scalar.head = torch.nn.Linear(d_model, 1)
     return scalar
@@ -88,16 +87,14 @@ class Config(cli.OutputFlags):
     flip: float = 0.2
     """share of the pairs whose label is flipped (InstructGPT's labellers agreed ~73%)"""
     rm_epochs: int = 4
-    """passes over the pairs (InstructGPT: 1, a prompt's pairs together; here each pair
-    apart, and the carry is learned late: held-out pair accuracy ~0.6 after 2, 0.9 after 4)"""
+    """passes over the pairs, each pair apart (InstructGPT: 1, a prompt's pairs together)"""
     rm_batch: int = 64
     """pairs per reward-model (and DPO) step"""
     rm_lr: float = 1e-3
     """Adam step size of the reward model"""
     # --- PPO ---
     reward_from: str = "model"
-    """'model': PPO's reward is the reward model's score (RLHF); 'judge': the hidden score
-    itself on r's scale, as a verifier would give it (what a perfect reward model would do)"""
+    """model: PPO's reward is the reward model's r (RLHF); judge: the hidden score on r's scale"""
     ppo_steps: int = 50
     """PPO updates, each on a fresh batch of prompts"""
     ppo_prompts: int = 256
@@ -113,8 +110,7 @@ class Config(cli.OutputFlags):
     vf_coef: float = 0.5
     """value loss weight c1 (PPO eq. 9); inert here: no shared weights, no gradient clip, Adam"""
     beta: float = 0.1
-    """weight of the per-token KL penalty to pi_ref; 0 lets PPO go as far as r pays it. Not
-    comparable with Stiennon et al.'s 0.05 or InstructGPT's 0.02: r's scale differs (printed)"""
+    """weight of the per-token KL penalty to pi_ref (0: none); it weighs against r's scale"""
     gamma: float = 1.0
     """discount over the tokens of an answer (1: the reward at the end counts in full)"""
     lam: float = 0.95
@@ -135,11 +131,8 @@ class Config(cli.OutputFlags):
     """answers sampled per held-out prompt at each check"""
     eval_every: int = 10
     """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
-    # --- the shared flags, as they read here ---
     eval: str | None = None
-    """a saved run's model.pt or folder: skip training, print 6 sampled answers to each of 6
-    held-out sums with the judge's hidden score, and the held-out true score and accuracy (the
-    PPO policy, and the DPO model if one was trained)"""
+    """a saved run's model.pt or folder: print its PPO and DPO models' held-out answers, scores"""
     eval_seed: int = 10_000
     """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
@@ -163,13 +156,12 @@ class Config(cli.OutputFlags):
                   f"multiple of --n-head ({self.n_head})")
 
 
-# ==== The task's labels, the judge and its preference pairs ===============================
+# ==== The labels, the judge and its pairs; the losses and the updates ======================
 
 
 def label_of(a, b, digits, wrong=False):
-    """A supervised label: the sum, or with `wrong` its carry out of the ones digit wrong:
-    dropped where there is one, added where there is none (47+38=075., 41+38=089.). Wrong
-    both ways, so that "a larger tens digit" is no shortcut to the right answer."""
+    """A supervised label: the sum, or with `wrong` its carry out of the ones digit wrong both
+    ways, dropped or added (47+38=075., 41+38=089.): "a larger tens digit" is no shortcut."""
     carry = 10 if a % 10 + b % 10 >= 10 else -10
     return f"{a + b - (carry if wrong else 0):0{digits + 1}d}."
 
@@ -194,26 +186,19 @@ def scores_of(seqs, digits):
 
 
 def preference_pairs(seqs, scores, K, flip, rng):
-    """The judge ranks each prompt's K answers (rows k*K .. k*K+K-1 of `seqs`): every pair with
-    different scores becomes (chosen, rejected); a tie teaches nothing and is dropped. Then a
-    `flip` share of the pairs is swapped, as people disagree. Returns (chosen, rejected, right):
-    right[i] is False where pair i was flipped (kept to measure, never trained on)."""
-    chosen, rejected = [], []
+    """The judge ranks each prompt's K answers (rows k*K .. k*K+K-1 of `seqs`): each pair with
+    different scores becomes (chosen, rejected), ties are dropped; a `flip` share is swapped, as
+    people disagree. Returns (chosen, rejected, right): right[i] False where pair i flipped."""
+    pairs = []  # (chosen, rejected) row numbers
     for start in range(0, len(seqs), K):
         for i in range(start, start + K):
             for j in range(i + 1, start + K):
                 if scores[i] != scores[j]:
-                    w, l = (i, j) if scores[i] > scores[j] else (j, i)
-                    chosen.append(w)
-                    rejected.append(l)
-    chosen, rejected = torch.tensor(chosen), torch.tensor(rejected)
-    flipped = torch.as_tensor(rng.random(len(chosen)) < flip)
-    chosen, rejected = (torch.where(flipped, rejected, chosen),
-                        torch.where(flipped, chosen, rejected))
-    return seqs[chosen], seqs[rejected], ~flipped
-
-
-# ==== Losses ==============================================================================
+                    pairs.append((i, j) if scores[i] > scores[j] else (j, i))
+    pairs = torch.tensor(pairs, dtype=torch.long).view(-1, 2)
+    flipped = torch.as_tensor(rng.random(len(pairs)) < flip)
+    pairs[flipped] = pairs[flipped].flip(1)
+    return seqs[pairs[:, 0]], seqs[pairs[:, 1]], ~flipped
 
 
 def sequence_score(scalar_model, seqs, P):
@@ -244,10 +229,8 @@ def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
 
 def per_token_rewards(score, logp_old, logp_ref, mask, beta):
     """R(x, y) = r(x, y) - beta log(pi(y|x) / pi_ref(y|x))  (Ziegler et al. 2019, eq. 2;
-    Stiennon et al. 2020, eq. 1), spread over the tokens: each token gets -beta (log pi_old -
-    log pi_ref) of itself, the last also the reward model's score. Returns (rewards, kl),
-    (B, L), zero after the answer's end. E.g. beta 0.1, one token with log ratio 0.5, then the
-    last with 0 and score 2: rewards -0.05, 2."""
+    Stiennon et al. 2020, eq. 1), spread over the tokens. Returns (rewards, kl), (B, L), 0 after
+    the end. E.g. beta 0.1, log ratios 0.5 then 0, score 2: rewards -0.05, 2."""
     kl = (logp_old - logp_ref) * mask  # log pi_old / pi_ref of each sampled token (k1)
     rewards = -beta * kl
     last = mask.sum(1).long() - 1  # the answer's last token
@@ -256,10 +239,9 @@ def per_token_rewards(score, logp_old, logp_ref, mask, beta):
 
 
 def token_advantages(rewards, values, mask, gamma, lam):
-    """GAE over each answer's tokens, with common.gae, the function ppo_cartpole.py calls: time
-    is the token (B, L) -> (L, B); V(s_{t+1}) is the next token's value, and an answer's last
-    token is terminated (nothing follows), as is every padding token after it (masked out
-    later). Returns (advantages, returns), (B, L), zero after the end."""
+    """GAE over each answer's tokens with ppo_cartpole.py's common.gae, time being the token,
+    (B, L) -> (L, B): V(s_{t+1}) is the next token's value; the last token (and the padding
+    after it, masked out) is terminated. Returns (advantages, returns), (B, L), 0 after the end."""
     next_values = torch.cat([values[:, 1:], torch.zeros_like(values[:, :1])], 1)
     end = torch.cat([mask[:, 1:], torch.zeros_like(mask[:, :1])], 1) == 0  # no next token
     adv = common.gae(rewards.T, values.T, next_values.T, end.T, torch.zeros_like(end.T), gamma,
@@ -293,9 +275,8 @@ def supervised_batch(train_pairs, cfg, rng):
 
 @torch.no_grad()
 def evaluate(model, pairs, cfg, n=None):
-    """Held-out true score (the judge's mean) and accuracy (the share of right answers), over
-    eval_samples answers to each prompt drawn from pi at temperature 1, with a generator of
-    their own (training's draws are not shifted)."""
+    """Held-out true score (the judge's mean) and accuracy (the share of right answers) of
+    eval_samples answers a prompt, drawn with a generator of their own (training's stay put)."""
     prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.eval_samples, 0)
     seqs = sample(model, prompts, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed))
     scores = scores_of(seqs, cfg.digits)
@@ -303,9 +284,8 @@ def evaluate(model, pairs, cfg, n=None):
 
 
 def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
-    """`epochs` passes of Adam over the pairs, shuffled, `batch` at a time: the reward model's
-    Bradley-Terry loss and DPO's both take (chosen, rejected) pairs. pair_loss(idx) -> the
-    loss of pairs idx; after_step(step, loss) logs."""
+    """`epochs` passes of Adam over the shuffled pairs, `batch` at a time, for the reward model
+    and DPO alike: pair_loss(idx) is the loss of pairs idx; after_step(step, loss) logs."""
     opt, step = torch.optim.Adam(model.parameters(), lr=lr), 0
     for epoch in range(epochs):
         for idx in torch.randperm(n_pairs, generator=gen).split(batch):
@@ -317,34 +297,14 @@ def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
             after_step(step, loss)
 
 
-def shift_to_zero(rm, seqs, P):
-    """Shift r so that the supervised model's answers `seqs` score 0 on average (Ziegler et
-    al. 2019, sec. 2; they also scale r to variance 1: not here, so beta weighs against r's
-    std). Returns r on those answers before the shift, and the shift."""
-    with torch.no_grad():
-        r_sft = sequence_score(rm, seqs, P)
-        shift = r_sft.mean()
-        rm.head.bias -= shift
-    return r_sft, shift
-
-
 def critic_start(cfg, reference, rm):
-    """V for PPO: a copy of the reward model (InstructGPT, Ouyang et al. 2022, sec. 3.5). For
-    --reward-from judge, the control, with no judge network to copy: the supervised model with
-    a zero head, V = 0, right on average on its answers (r is shifted to mean 0 there)."""
+    """V for PPO: a copy of the reward model (InstructGPT, Ouyang et al. 2022, sec. 3.5); for
+    --reward-from judge, the supervised model with a zero head: V = 0, the reward's mean."""
     if cfg.reward_from != "judge":
         return copy.deepcopy(rm).requires_grad_()
     value_net = with_scalar_head(reference, cfg.d_model).requires_grad_()
     torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
     return value_net
-
-
-def implicit_reward_accuracy(dpo_policy, reference, y_w, y_l, P):
-    """DPO's held-out pair accuracy: how often its implicit reward, log pi(y|x) - log
-    pi_ref(y|x) (Rafailov et al. 2023, sec. 5), ranks y_w above y_l."""
-    with torch.no_grad():
-        w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P) for y in (y_w, y_l))
-    return (w > l).float().mean().item()
 
 
 def ppo_update(policy, value_net, opt, data, cfg, gen):
@@ -372,10 +332,12 @@ def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
 
 
 def stage_done(result, name, model, held_out, cfg, start):
-    """After a stage: held-out true score and accuracy on all the held-out prompts, one line."""
+    """After a stage: held-out true score and accuracy on all the held-out prompts, one line.
+    Returns the time: the next stage's start."""
     score, accuracy = result["held"][name] = evaluate(model, held_out, cfg)
     print(f"{name}: held-out true score {score:.3f}, accuracy {accuracy:.3f} (took "
           f"{time.time() - start:.0f} s)", flush=True)
+    return time.time()
 
 
 LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
@@ -403,8 +365,7 @@ def train(cfg: Config):
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     result, nets = dict(run_dir=run.dir, held={}, rm_accuracy=None), dict(policy=policy)
 
-    # Ctrl-C ends training; either way, model.pt is saved as training left it
-    with run.saving_model(nets):
+    with run.saving_model(nets):  # Ctrl-C ends training; model.pt is saved as training left it
         # --- 1. supervised phase: imitate the labels, wrong ones included ---
         opt, start = torch.optim.Adam(policy.parameters(), lr=cfg.sft_lr), time.time()
         for step in range(1, cfg.sft_steps + 1):
@@ -415,10 +376,9 @@ def train(cfg: Config):
             log_row(run, held_out, cfg, "sft", loss=loss.item(),
                     check=policy if step % (20 * cfg.eval_every) == 0 else None)
         reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
-        stage_done(result, "supervised", policy, held_out, cfg, start)
+        start = stage_done(result, "supervised", policy, held_out, cfg, start)
 
         # --- 2. the judge ranks K answers to each prompt (held out: its true order, no flips) ---
-        start = time.time()
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
         judged = scores_of(seqs, cfg.digits)  # the supervised answers, judged
@@ -435,7 +395,8 @@ def train(cfg: Config):
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
             result["rm_accuracy"] = (r_w > r_l).float().mean().item()
-        r_sft, shift = shift_to_zero(rm, seqs, P)  # the supervised answers' r: 0 on average
+            r_sft = sequence_score(rm, seqs, P)  # r of the supervised answers, shifted to mean 0
+            rm.head.bias -= r_sft.mean()  # (Ziegler et al. 2019, sec. 2; not scaled to std 1)
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
         print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
               f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs; on the supervised "
@@ -443,9 +404,8 @@ def train(cfg: Config):
               f"{time.time() - start:.0f} s)", flush=True)
 
         # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
-        # --reward-from judge, the control, changes only which answers pay more: the judge on
-        # r's scale (mean 0, r's std on the supervised answers), so beta weighs alike
-        judge = cfg.reward_from == "judge"
+        # --reward-from judge, the control: the judge on r's scale, so that beta weighs alike
+        mean_j, std_j, std_r = judged.mean(), judged.std(), r_sft.std()  # on supervised answers
         value_net = nets["value"] = critic_start(cfg, reference, rm)
         opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                       lr=cfg.learning_rate), time.time()
@@ -457,7 +417,7 @@ def train(cfg: Config):
             with torch.no_grad():
                 logp_old, logp_ref = token_logp(policy, seqs, P), token_logp(reference, seqs, P)
                 learned = sequence_score(rm, seqs, P)  # r(x, y), logged in either case
-                score = (truth - judged.mean()) / judged.std() * r_sft.std() if judge else learned
+                score = (truth - mean_j) / std_j * std_r if cfg.reward_from == "judge" else learned
                 values = value_net(seqs[:, :-1]).squeeze(-1)[:, P - 1:] * mask  # V(s_t), (B, L)
                 rewards, kl = per_token_rewards(score, logp_old, logp_ref, mask, cfg.beta)
                 adv, ret = token_advantages(rewards, values, mask, cfg.gamma, cfg.lam)
@@ -468,12 +428,11 @@ def train(cfg: Config):
             log_row(run, held_out, cfg, "ppo", check=None if step % cfg.eval_every else policy,
                     loss=loss_pi.item(), rm_score=learned.mean().item(), kl=kl.sum(1).mean().item(),
                     true_score=truth.mean().item(), loss_v=loss_v.item(), clipfrac=clipfrac.item())
-        stage_done(result, "PPO", policy, held_out, cfg, start)
+        start = stage_done(result, "PPO", policy, held_out, cfg, start)
 
         # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
         if cfg.dpo:
-            dpo_policy, start = copy.deepcopy(reference).requires_grad_(True), time.time()
-            nets["dpo"] = dpo_policy
+            dpo_policy = nets["dpo"] = copy.deepcopy(reference).requires_grad_(True)
             with torch.no_grad():  # log pi_ref(y|x) of every pair's answers, once
                 ref_w, ref_l = (answer_logp(reference, y, P) for y in (chosen, rejected))
             logged = lambda step, loss: log_row(run, held_out, cfg, "dpo", loss=loss.item(),  # noqa
@@ -483,19 +442,21 @@ def train(cfg: Config):
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
                 cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
-            print("DPO's implicit reward: held-out pair accuracy "
-                  f"{implicit_reward_accuracy(dpo_policy, reference, test_w, test_l, P):.3f}")
+            # its implicit reward, log pi(y|x) - log pi_ref(y|x) (Rafailov et al. 2023, sec. 5)
+            with torch.no_grad():
+                w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
+                        for y in (test_w, test_l))
+            print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
     else:
-        report.draw_logged(run, pictures(r_w - shift, r_l - shift))
+        report.draw_logged(run, pictures(r_w - r_sft.mean(), r_l - r_sft.mean()))
     return dict(result, interrupted=run.interrupted)
 
 
 def pictures(r_w, r_l):
-    """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
-    r_w, r_l of the held-out pairs' chosen and rejected answers, and the over-optimisation
-    picture: learned reward and true score of PPO's samples against their KL to pi_ref."""
+    """curve.png: each stage's numbers over its steps. inside.png: r of the held-out pairs'
+    answers, and PPO's learned reward and true score against the KL to pi_ref."""
     numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
     stages = [plots.lines(*numbers, title=name, where=("phase", name), xlabel="step")
               for name in ("sft", "rm", "ppo", "dpo")]
