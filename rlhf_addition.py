@@ -10,9 +10,6 @@ some pairs flipped as people's are; a reward model (a scalar head) learns them (
 PPO, per-token reward -beta * (log pi_old - log pi_ref) plus r on the last token, GAE over the
 tokens; DPO on the same pairs. Each line's PPO counterpart: docs/ppo_to_rlhf.md.
 
-    python rlhf_addition.py                 # all stages (a few minutes on a CPU)
-    python rlhf_addition.py --eval runs/latest    # answers of the saved PPO and DPO models
-
 中文导读：基于人类反馈的强化学习（RLHF，InstructGPT 的三步），在一个会做加法的小 Transformer 上跑通（这里一个字符就是一个 token）。
 先做监督训练（30% 的标签把进位弄错了，模型只是有时答对）；然后让模型对每个题目写 K 个回答，由一个
 “评审”按隐藏的分数（答案里对的字符所占的比例）排序，其中一部分成对的比较被故意翻转，就像人的标注会出错；
@@ -29,7 +26,6 @@ from pathlib import Path
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 
 import checkpoints
 import cli
@@ -41,25 +37,28 @@ from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
                            sample, sft_loss, split_pairs, token_logp)
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
+              rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
+              kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
+              clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
+              held_accuracy=(".3f", "held-out accuracy"))  # progress.csv: (line format, label)
+SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
+             eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
 
 
-# ==== Networks: the policy is grpo_addition.TinyGPT; the others swap its head =============
-
-
-def with_scalar_head(model, d_model):
-    """A copy of `model` whose head gives one number per position, (B, T) -> (B, T, 1): the
-    reward model r(x, y) and the value network V(s) (InstructGPT: a trained transformer's)."""
-    scalar = copy.deepcopy(model)
+def with_scalar_head(model, d_model, zero=False):
+    """A trainable copy of `model` (the policy: grpo_addition.TinyGPT) whose new head gives one
+    number per position, (B, T) -> (B, T, 1): the reward model r(x, y) and the value network
+    V(s), both from a trained transformer (InstructGPT). `zero`: the head starts at 0."""
+    scalar = copy.deepcopy(model).requires_grad_(True)
     scalar.head = torch.nn.Linear(d_model, 1)
+    if zero:
+        torch.nn.init.zeros_(scalar.head.weight), torch.nn.init.zeros_(scalar.head.bias)
     return scalar
-
-
-# ==== Hyperparameters =====================================================================
 
 
 @dataclass
 class Config(cli.OutputFlags):
-    """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
     UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard")  # not here
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
@@ -79,11 +78,10 @@ class Config(cli.OutputFlags):
     """examples per supervised step"""
     sft_lr: float = 1e-3
     """Adam step size of the supervised phase"""
-    # --- preferences and the reward model ---
     pair_prompts: int = 3000
     """training prompts whose answers the judge ranks"""
     answers_per_prompt: int = 4
-    """K answers ranked per prompt, giving up to K(K-1)/2 pairs (InstructGPT: 4 to 9)"""
+    """K answers a prompt: ranked (up to K(K-1)/2 pairs; InstructGPT: 4 to 9), or held-out checks"""
     flip: float = 0.2
     """share of the pairs whose label is flipped (InstructGPT's labellers agreed ~73%)"""
     rm_epochs: int = 4
@@ -92,7 +90,6 @@ class Config(cli.OutputFlags):
     """pairs per reward-model (and DPO) step"""
     rm_lr: float = 1e-3
     """Adam step size of the reward model"""
-    # --- PPO ---
     reward_from: str = "model"
     """model: PPO's reward is the reward model's r (RLHF); judge: the hidden score on r's scale"""
     ppo_steps: int = 50
@@ -110,12 +107,11 @@ class Config(cli.OutputFlags):
     vf_coef: float = 0.5
     """value loss weight c1 (PPO eq. 9); inert here: no shared weights, no gradient clip, Adam"""
     beta: float = 0.1
-    """weight of the per-token KL penalty to pi_ref (0: none); it weighs against r's scale"""
+    """weight of the per-token KL penalty to pi_ref (0: none), relative to r's scale (printed)"""
     gamma: float = 1.0
     """discount over the tokens of an answer (1: the reward at the end counts in full)"""
     lam: float = 0.95
     """GAE lambda over the tokens (Ziegler et al.: 0.95)"""
-    # --- DPO ---
     dpo: bool = True
     """after PPO, train a copy of the supervised model by DPO on the same pairs"""
     dpo_beta: float = 0.1
@@ -124,39 +120,30 @@ class Config(cli.OutputFlags):
     """passes of DPO over the pairs"""
     dpo_lr: float = 1e-4
     """Adam step size of DPO"""
-    # --- evaluation ---
     eval_prompts: int = 500
     """held-out prompts (never trained on, nor ranked for training)"""
-    eval_samples: int = 4
-    """answers sampled per held-out prompt at each check"""
     eval_every: int = 10
     """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
     eval: str | None = None
     """a saved run's model.pt or folder: print its PPO and DPO models' held-out answers, scores"""
-    eval_seed: int = 10_000
-    """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
     def __post_init__(self):
         cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
                   "--cuda, --tensorboard: no env to play, no GPU code, no TensorBoard logs here")
         super().__post_init__()
-        cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
-                         sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", label_noise="[0, 1]",
-                         pair_prompts="> 0", answers_per_prompt="> 1", flip="[0, 1]",
-                         rm_epochs="> 0", rm_batch="> 0", rm_lr="> 0", ppo_steps=">= 0",
-                         ppo_prompts="> 0", update_epochs="> 0", num_minibatches="> 0",
-                         learning_rate="> 0", clip_coef="> 0", vf_coef=">= 0", beta=">= 0",
-                         gamma="[0, 1]", lam="[0, 1]", dpo_beta="> 0", dpo_epochs="> 0",
-                         dpo_lr="> 0", eval_prompts="> 0", eval_samples="> 0", eval_every="> 0")
+        cli.check_ranges(self, digits="> 0", d_model="> 0", n_layer="> 0", n_head="> 0",
+                         label_noise="[0, 1]", sft_steps="> 0", sft_batch="> 0", pair_prompts="> 0",
+                         answers_per_prompt="> 1", rm_epochs="> 0", flip="[0, 1]", sft_lr="> 0",
+                         rm_batch="> 0", num_minibatches="> 0", ppo_steps=">= 0", ppo_prompts="> 0",
+                         rm_lr="> 0", update_epochs="> 0", learning_rate="> 0", clip_coef="> 0",
+                         vf_coef=">= 0", beta=">= 0", gamma="[0, 1]", lam="[0, 1]", dpo_beta="> 0",
+                         dpo_epochs="> 0", dpo_lr="> 0", eval_prompts="> 0", eval_every="> 0")
         cli.check(self.reward_from in ("model", "judge"),
                   f"--reward-from must be model or judge, got {self.reward_from}")
         cli.check(self.num_minibatches <= self.ppo_prompts, f"--num-minibatches "
                   f"({self.num_minibatches}) exceeds --ppo-prompts ({self.ppo_prompts})")
         cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
                   f"multiple of --n-head ({self.n_head})")
-
-
-# ==== The labels, the judge and its pairs; the losses and the updates ======================
 
 
 def label_of(a, b, digits, wrong=False):
@@ -211,7 +198,7 @@ def sequence_score(scalar_model, seqs, P):
 def bradley_terry_loss(r_chosen, r_rejected):
     """loss(theta) = -E[log sigmoid(r(x, y_w) - r(x, y_l))]  (Ouyang et al. 2022, eq. 1;
     Christiano et al. 2017, section 2.2.3): P(y_w preferred) = sigmoid of the score gap."""
-    return -F.logsigmoid(r_chosen - r_rejected).mean()
+    return -torch.nn.functional.logsigmoid(r_chosen - r_rejected).mean()
 
 
 def answer_logp(model, seqs, P):
@@ -224,7 +211,7 @@ def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
                              - beta log(pi(y_l|x) / pi_ref(y_l|x)))]
     (Rafailov et al. 2023, eq. 7): Bradley-Terry with beta log(pi / pi_ref) of the whole answer
     as the reward."""
-    return -F.logsigmoid(beta * ((logp_w - ref_w) - (logp_l - ref_l))).mean()
+    return -torch.nn.functional.logsigmoid(beta * ((logp_w - ref_w) - (logp_l - ref_l))).mean()
 
 
 def per_token_rewards(score, logp_old, logp_ref, mask, beta):
@@ -275,9 +262,9 @@ def supervised_batch(train_pairs, cfg, rng):
 
 @torch.no_grad()
 def evaluate(model, pairs, cfg, n=None):
-    """Held-out true score (the judge's mean) and accuracy (the share of right answers) of
-    eval_samples answers a prompt, drawn with a generator of their own (training's stay put)."""
-    prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.eval_samples, 0)
+    """Held-out true score (the judge's mean) and accuracy (the share of right answers) of K
+    answers a prompt (as grpo_addition.py samples G), drawn with a generator of their own."""
+    prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.answers_per_prompt, 0)
     seqs = sample(model, prompts, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed))
     scores = scores_of(seqs, cfg.digits)
     return scores.mean().item(), (scores == 1).float().mean().item()
@@ -297,16 +284,6 @@ def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
             after_step(step, loss)
 
 
-def critic_start(cfg, reference, rm):
-    """V for PPO: a copy of the reward model (InstructGPT, Ouyang et al. 2022, sec. 3.5); for
-    --reward-from judge, the supervised model with a zero head: V = 0, the reward's mean."""
-    if cfg.reward_from != "judge":
-        return copy.deepcopy(rm).requires_grad_()
-    value_net = with_scalar_head(reference, cfg.d_model).requires_grad_()
-    torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
-    return value_net
-
-
 def ppo_update(policy, value_net, opt, data, cfg, gen):
     """update_epochs passes of shuffled minibatches of answers over one batch `data`, as in
     ppo_cartpole.py's ppo_update. Returns the last minibatch's (loss_pi, loss_v, clipfrac)."""
@@ -323,8 +300,7 @@ def ppo_update(policy, value_net, opt, data, cfg, gen):
 
 
 def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
-    """A progress.csv row, None where not measured; with a model to `check`, its held-out true
-    score and accuracy on 100 prompts, on a progress line."""
+    """A progress.csv row (None: not measured), with held-out figures of a model to `check`."""
     run.global_step += 1
     held = evaluate(check, held_out, cfg, 100) if check is not None else (None, None)
     run.update(dict(dict.fromkeys(LOGGED), phase=phase, **numbers, held_true=held[0],
@@ -340,21 +316,8 @@ def stage_done(result, name, model, held_out, cfg, start):
     return time.time()
 
 
-LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
-              rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
-              kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
-              clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
-              held_accuracy=(".3f", "held-out accuracy"))  # progress.csv: (line format, label)
-SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
-             eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
-
-
-# ==== Training ============================================================================
-
-
 def train(cfg: Config):
-    """Supervise, rank, fit the reward model, PPO, then DPO. Returns a dict: run_dir, held
-    (held-out true score and accuracy after each stage), rm_accuracy, interrupted."""
+    """The stages. Returns run_dir, held (held-out figures by stage), rm_accuracy, interrupted."""
     torch.manual_seed(cfg.seed)  # the model's init
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
@@ -377,7 +340,6 @@ def train(cfg: Config):
                     check=policy if step % (20 * cfg.eval_every) == 0 else None)
         reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
         start = stage_done(result, "supervised", policy, held_out, cfg, start)
-
         # --- 2. the judge ranks K answers to each prompt (held out: its true order, no flips) ---
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
@@ -385,9 +347,8 @@ def train(cfg: Config):
         chosen, rejected, _ = preference_pairs(seqs, judged, K, cfg.flip, rng)
         test = sample(reference, prompt_ids(held_out, cfg.digits).repeat_interleave(K, 0), L, gen)
         test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
-
         # --- 3. the reward model: r(x, y_w) above r(x, y_l), Bradley-Terry ---
-        rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model).requires_grad_(True)
+        rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model)
         logged = lambda step, loss: log_row(run, held_out, cfg, "rm", loss=loss.item())  # noqa
         fit_on_pairs(rm, lambda idx: bradley_terry_loss(sequence_score(rm, chosen[idx], P),
                                                         sequence_score(rm, rejected[idx], P)),
@@ -398,15 +359,15 @@ def train(cfg: Config):
             r_sft = sequence_score(rm, seqs, P)  # r of the supervised answers, shifted to mean 0
             rm.head.bias -= r_sft.mean()  # (Ziegler et al. 2019, sec. 2; not scaled to std 1)
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
-        print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
-              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs; on the supervised "
-              f"answers r has std {r_sft.std():.2f}, the judge {judged.std():.3f} (took "
-              f"{time.time() - start:.0f} s)", flush=True)
-
+        print(f"reward model: {len(chosen)} pairs, {cfg.flip:.0%} flipped; held-out pair accuracy "
+              f"{result['rm_accuracy']:.3f} ({len(test_w)} pairs); supervised answers: r has std "
+              f"{r_sft.std():.2f}, the judge {judged.std():.3f} (took {time.time() - start:.0f} s)")
         # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
-        # --reward-from judge, the control: the judge on r's scale, so that beta weighs alike
+        # V starts as r (InstructGPT, Ouyang et al. 2022, sec. 3.5). --reward-from judge, the
+        # control: the judge on r's scale, so beta weighs alike, and V = 0 (no r to start from)
         mean_j, std_j, std_r = judged.mean(), judged.std(), r_sft.std()  # on supervised answers
-        value_net = nets["value"] = critic_start(cfg, reference, rm)
+        value_net = nets["value"] = (copy.deepcopy(rm) if cfg.reward_from == "model" else
+                                     with_scalar_head(reference, cfg.d_model, zero=True))
         opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                       lr=cfg.learning_rate), time.time()
         for step in range(1, cfg.ppo_steps + 1):
@@ -429,7 +390,6 @@ def train(cfg: Config):
                     loss=loss_pi.item(), rm_score=learned.mean().item(), kl=kl.sum(1).mean().item(),
                     true_score=truth.mean().item(), loss_v=loss_v.item(), clipfrac=clipfrac.item())
         start = stage_done(result, "PPO", policy, held_out, cfg, start)
-
         # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
         if cfg.dpo:
             dpo_policy = nets["dpo"] = copy.deepcopy(reference).requires_grad_(True)
@@ -442,8 +402,7 @@ def train(cfg: Config):
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
                 cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
-            # its implicit reward, log pi(y|x) - log pi_ref(y|x) (Rafailov et al. 2023, sec. 5)
-            with torch.no_grad():
+            with torch.no_grad():  # log pi(y|x) - log pi_ref(y|x), Rafailov et al. 2023, sec. 5
                 w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
                         for y in (test_w, test_l))
             print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
@@ -455,8 +414,7 @@ def train(cfg: Config):
 
 
 def pictures(r_w, r_l):
-    """curve.png: each stage's numbers over its steps. inside.png: r of the held-out pairs'
-    answers, and PPO's learned reward and true score against the KL to pi_ref."""
+    """curve.png: each stage over its steps; inside.png: r on held-out pairs, PPO's over KL."""
     numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
     stages = [plots.lines(*numbers, title=name, where=("phase", name), xlabel="step")
               for name in ("sft", "rm", "ppo", "dpo")]
@@ -477,17 +435,17 @@ def main(argv=None):
             return report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
         print(f"{cfg.eval}:", flush=True)  # the run evaluated (runs/latest: the newest)
-        c = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
+        known = {k: v for k, v in saved["config"].items() if k in Config.__dataclass_fields__}
+        c = Config(**{**known, "eval": None, "gif": None})  # its task, its split
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
-        P, gen = 2 * c.digits + 2, torch.Generator().manual_seed(c.eval_seed)
         for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
                 c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
             seqs = sample(model, prompt_ids(held_out[:6], c.digits).repeat_interleave(6, 0),
-                          c.digits + 2, gen).view(6, 6, -1)  # 6 answers to each of 6 sums
-            for row in seqs:
-                print(f"{key:6} {decode(row[0, :P].tolist())} " + " ".join(f"{decode(s[P:])}"
-                      f"({v:.2f})" for s, v in zip(row.tolist(), scores_of(row, c.digits))))
+                          c.digits + 2, torch.Generator().manual_seed(c.eval_seed))
+            for row in seqs.view(6, 6, -1):  # 6 answers to each of 6 sums, the same draws
+                print(key, " ".join(f"{decode(s)}({v:.2f})"
+                                    for s, v in zip(row.tolist(), scores_of(row, c.digits))))
             print(f"{key}: held-out ({len(held_out)} prompts) true score %.3f, accuracy %.3f  "
                   "((n): the judge's hidden score)" % evaluate(model, held_out, c), flush=True)
 
