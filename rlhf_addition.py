@@ -10,9 +10,6 @@ some pairs flipped as people's are; a reward model (a scalar head) learns them (
 PPO, per-token reward -beta * (log pi_old - log pi_ref) plus r on the last token, GAE over the
 tokens; DPO on the same pairs. Each line's PPO counterpart: docs/ppo_to_rlhf.md.
 
-    python rlhf_addition.py                 # all stages (a few minutes on a CPU)
-    python rlhf_addition.py --eval runs/latest    # answers of the saved PPO and DPO models
-
 中文导读：基于人类反馈的强化学习（RLHF，InstructGPT 的三步），在一个会做加法的小 Transformer 上跑通（这里一个字符就是一个 token）。
 先做监督训练（30% 的标签把进位弄错了，模型只是有时答对）；然后让模型对每个题目写 K 个回答，由一个
 “评审”按隐藏的分数（答案里对的字符所占的比例）排序，其中一部分成对的比较被故意翻转，就像人的标注会出错；
@@ -29,7 +26,6 @@ from pathlib import Path
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 
 import checkpoints
 import cli
@@ -41,26 +37,28 @@ from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
                            sample, sft_loss, split_pairs, token_logp)
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
+              rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
+              kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
+              clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
+              held_accuracy=(".3f", "held-out accuracy"))  # progress.csv: (line format, label)
+SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
+             eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
 
 
-# ==== Networks: the policy is grpo_addition.TinyGPT; the others swap its head =============
-
-
-def with_scalar_head(model, d_model):
-    """A copy of `model` whose head gives one number per position instead of the next token's
-    logits: the reward model r(x, y) and the value network V(s) (InstructGPT: both start
-    from a trained transformer, with a new head). (B, T) ids -> (B, T, 1)."""
-    scalar = copy.deepcopy(model)
+def with_scalar_head(model, d_model, zero=False):
+    """A trainable copy of `model` (the policy: grpo_addition.TinyGPT) whose new head gives one
+    number per position, (B, T) -> (B, T, 1): the reward model r(x, y) and the value network
+    V(s), both from a trained transformer (InstructGPT). `zero`: the head starts at 0."""
+    scalar = copy.deepcopy(model).requires_grad_(True)
     scalar.head = torch.nn.Linear(d_model, 1)
+    if zero:
+        torch.nn.init.zeros_(scalar.head.weight), torch.nn.init.zeros_(scalar.head.bias)
     return scalar
-
-
-# ==== Hyperparameters =====================================================================
 
 
 @dataclass
 class Config(cli.OutputFlags):
-    """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
     UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard")  # not here
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
@@ -80,24 +78,20 @@ class Config(cli.OutputFlags):
     """examples per supervised step"""
     sft_lr: float = 1e-3
     """Adam step size of the supervised phase"""
-    # --- preferences and the reward model ---
     pair_prompts: int = 3000
     """training prompts whose answers the judge ranks"""
     answers_per_prompt: int = 4
-    """K answers ranked per prompt, giving up to K(K-1)/2 pairs (InstructGPT: 4 to 9)"""
+    """K answers a prompt: ranked (up to K(K-1)/2 pairs; InstructGPT: 4 to 9), or held-out checks"""
     flip: float = 0.2
     """share of the pairs whose label is flipped (InstructGPT's labellers agreed ~73%)"""
     rm_epochs: int = 4
-    """passes over the pairs (InstructGPT: 1, a prompt's pairs together; here each pair
-    apart, and the carry is learned late: held-out pair accuracy ~0.6 after 2, 0.9 after 4)"""
+    """passes over the pairs, each pair apart (InstructGPT: 1, a prompt's pairs together)"""
     rm_batch: int = 64
     """pairs per reward-model (and DPO) step"""
     rm_lr: float = 1e-3
     """Adam step size of the reward model"""
-    # --- PPO ---
     reward_from: str = "model"
-    """'model': PPO's reward is the reward model's score (RLHF); 'judge': the hidden score
-    itself on r's scale, as a verifier would give it (what a perfect reward model would do)"""
+    """model: PPO's reward is the reward model's r (RLHF); judge: the hidden score on r's scale"""
     ppo_steps: int = 50
     """PPO updates, each on a fresh batch of prompts"""
     ppo_prompts: int = 256
@@ -113,13 +107,11 @@ class Config(cli.OutputFlags):
     vf_coef: float = 0.5
     """value loss weight c1 (PPO eq. 9); inert here: no shared weights, no gradient clip, Adam"""
     beta: float = 0.1
-    """weight of the per-token KL penalty to pi_ref; 0 lets PPO go as far as r pays it. Not
-    comparable with Stiennon et al.'s 0.05 or InstructGPT's 0.02: r's scale differs (printed)"""
+    """weight of the per-token KL penalty to pi_ref (0: none), relative to r's scale (printed)"""
     gamma: float = 1.0
     """discount over the tokens of an answer (1: the reward at the end counts in full)"""
     lam: float = 0.95
     """GAE lambda over the tokens (Ziegler et al.: 0.95)"""
-    # --- DPO ---
     dpo: bool = True
     """after PPO, train a copy of the supervised model by DPO on the same pairs"""
     dpo_beta: float = 0.1
@@ -128,33 +120,24 @@ class Config(cli.OutputFlags):
     """passes of DPO over the pairs"""
     dpo_lr: float = 1e-4
     """Adam step size of DPO"""
-    # --- evaluation ---
     eval_prompts: int = 500
     """held-out prompts (never trained on, nor ranked for training)"""
-    eval_samples: int = 4
-    """answers sampled per held-out prompt at each check"""
     eval_every: int = 10
     """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
-    # --- the shared flags, as they read here ---
     eval: str | None = None
-    """a saved run's model.pt or folder: skip training, print 6 sampled answers to each of 6
-    held-out sums with the judge's hidden score, and the held-out true score and accuracy (the
-    PPO policy, and the DPO model if one was trained)"""
-    eval_seed: int = 10_000
-    """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
+    """a saved run's model.pt or folder: print its PPO and DPO models' held-out answers, scores"""
 
     def __post_init__(self):
         cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
                   "--cuda, --tensorboard: no env to play, no GPU code, no TensorBoard logs here")
         super().__post_init__()
-        cli.check_ranges(self, digits="> 0", n_layer="> 0", d_model="> 0", n_head="> 0",
-                         sft_steps="> 0", sft_batch="> 0", sft_lr="> 0", label_noise="[0, 1]",
-                         pair_prompts="> 0", answers_per_prompt="> 1", flip="[0, 1]",
-                         rm_epochs="> 0", rm_batch="> 0", rm_lr="> 0", ppo_steps=">= 0",
-                         ppo_prompts="> 0", update_epochs="> 0", num_minibatches="> 0",
-                         learning_rate="> 0", clip_coef="> 0", vf_coef=">= 0", beta=">= 0",
-                         gamma="[0, 1]", lam="[0, 1]", dpo_beta="> 0", dpo_epochs="> 0",
-                         dpo_lr="> 0", eval_prompts="> 0", eval_samples="> 0", eval_every="> 0")
+        cli.check_ranges(self, digits="> 0", d_model="> 0", n_layer="> 0", n_head="> 0",
+                         label_noise="[0, 1]", sft_steps="> 0", sft_batch="> 0", pair_prompts="> 0",
+                         answers_per_prompt="> 1", rm_epochs="> 0", flip="[0, 1]", sft_lr="> 0",
+                         rm_batch="> 0", num_minibatches="> 0", ppo_steps=">= 0", ppo_prompts="> 0",
+                         rm_lr="> 0", update_epochs="> 0", learning_rate="> 0", clip_coef="> 0",
+                         vf_coef=">= 0", beta=">= 0", gamma="[0, 1]", lam="[0, 1]", dpo_beta="> 0",
+                         dpo_epochs="> 0", dpo_lr="> 0", eval_prompts="> 0", eval_every="> 0")
         cli.check(self.reward_from in ("model", "judge"),
                   f"--reward-from must be model or judge, got {self.reward_from}")
         cli.check(self.num_minibatches <= self.ppo_prompts, f"--num-minibatches "
@@ -163,13 +146,9 @@ class Config(cli.OutputFlags):
                   f"multiple of --n-head ({self.n_head})")
 
 
-# ==== The task's labels, the judge and its preference pairs ===============================
-
-
 def label_of(a, b, digits, wrong=False):
-    """A supervised label: the sum, or with `wrong` its carry out of the ones digit wrong:
-    dropped where there is one, added where there is none (47+38=075., 41+38=089.). Wrong
-    both ways, so that "a larger tens digit" is no shortcut to the right answer."""
+    """A supervised label: the sum, or with `wrong` its carry out of the ones digit wrong both
+    ways, dropped or added (47+38=075., 41+38=089.): "a larger tens digit" is no shortcut."""
     carry = 10 if a % 10 + b % 10 >= 10 else -10
     return f"{a + b - (carry if wrong else 0):0{digits + 1}d}."
 
@@ -194,26 +173,19 @@ def scores_of(seqs, digits):
 
 
 def preference_pairs(seqs, scores, K, flip, rng):
-    """The judge ranks each prompt's K answers (rows k*K .. k*K+K-1 of `seqs`): every pair with
-    different scores becomes (chosen, rejected); a tie teaches nothing and is dropped. Then a
-    `flip` share of the pairs is swapped, as people disagree. Returns (chosen, rejected, right):
-    right[i] is False where pair i was flipped (kept to measure, never trained on)."""
-    chosen, rejected = [], []
+    """The judge ranks each prompt's K answers (rows k*K .. k*K+K-1 of `seqs`): each pair with
+    different scores becomes (chosen, rejected), ties are dropped; a `flip` share is swapped, as
+    people disagree. Returns (chosen, rejected, right): right[i] False where pair i flipped."""
+    pairs = []  # (chosen, rejected) row numbers
     for start in range(0, len(seqs), K):
         for i in range(start, start + K):
             for j in range(i + 1, start + K):
                 if scores[i] != scores[j]:
-                    w, l = (i, j) if scores[i] > scores[j] else (j, i)
-                    chosen.append(w)
-                    rejected.append(l)
-    chosen, rejected = torch.tensor(chosen), torch.tensor(rejected)
-    flipped = torch.as_tensor(rng.random(len(chosen)) < flip)
-    chosen, rejected = (torch.where(flipped, rejected, chosen),
-                        torch.where(flipped, chosen, rejected))
-    return seqs[chosen], seqs[rejected], ~flipped
-
-
-# ==== Losses ==============================================================================
+                    pairs.append((i, j) if scores[i] > scores[j] else (j, i))
+    pairs = torch.tensor(pairs, dtype=torch.long).view(-1, 2)
+    flipped = torch.as_tensor(rng.random(len(pairs)) < flip)
+    pairs[flipped] = pairs[flipped].flip(1)
+    return seqs[pairs[:, 0]], seqs[pairs[:, 1]], ~flipped
 
 
 def sequence_score(scalar_model, seqs, P):
@@ -226,7 +198,7 @@ def sequence_score(scalar_model, seqs, P):
 def bradley_terry_loss(r_chosen, r_rejected):
     """loss(theta) = -E[log sigmoid(r(x, y_w) - r(x, y_l))]  (Ouyang et al. 2022, eq. 1;
     Christiano et al. 2017, section 2.2.3): P(y_w preferred) = sigmoid of the score gap."""
-    return -F.logsigmoid(r_chosen - r_rejected).mean()
+    return -torch.nn.functional.logsigmoid(r_chosen - r_rejected).mean()
 
 
 def answer_logp(model, seqs, P):
@@ -239,15 +211,13 @@ def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
                              - beta log(pi(y_l|x) / pi_ref(y_l|x)))]
     (Rafailov et al. 2023, eq. 7): Bradley-Terry with beta log(pi / pi_ref) of the whole answer
     as the reward."""
-    return -F.logsigmoid(beta * ((logp_w - ref_w) - (logp_l - ref_l))).mean()
+    return -torch.nn.functional.logsigmoid(beta * ((logp_w - ref_w) - (logp_l - ref_l))).mean()
 
 
 def per_token_rewards(score, logp_old, logp_ref, mask, beta):
     """R(x, y) = r(x, y) - beta log(pi(y|x) / pi_ref(y|x))  (Ziegler et al. 2019, eq. 2;
-    Stiennon et al. 2020, eq. 1), spread over the tokens: each token gets -beta (log pi_old -
-    log pi_ref) of itself, the last also the reward model's score. Returns (rewards, kl),
-    (B, L), zero after the answer's end. E.g. beta 0.1, one token with log ratio 0.5, then the
-    last with 0 and score 2: rewards -0.05, 2."""
+    Stiennon et al. 2020, eq. 1), spread over the tokens. Returns (rewards, kl), (B, L), 0 after
+    the end. E.g. beta 0.1, log ratios 0.5 then 0, score 2: rewards -0.05, 2."""
     kl = (logp_old - logp_ref) * mask  # log pi_old / pi_ref of each sampled token (k1)
     rewards = -beta * kl
     last = mask.sum(1).long() - 1  # the answer's last token
@@ -256,10 +226,9 @@ def per_token_rewards(score, logp_old, logp_ref, mask, beta):
 
 
 def token_advantages(rewards, values, mask, gamma, lam):
-    """GAE over each answer's tokens, with common.gae, the function ppo_cartpole.py calls: time
-    is the token (B, L) -> (L, B); V(s_{t+1}) is the next token's value, and an answer's last
-    token is terminated (nothing follows), as is every padding token after it (masked out
-    later). Returns (advantages, returns), (B, L), zero after the end."""
+    """GAE over each answer's tokens with ppo_cartpole.py's common.gae, time being the token,
+    (B, L) -> (L, B): V(s_{t+1}) is the next token's value; the last token (and the padding
+    after it, masked out) is terminated. Returns (advantages, returns), (B, L), 0 after the end."""
     next_values = torch.cat([values[:, 1:], torch.zeros_like(values[:, :1])], 1)
     end = torch.cat([mask[:, 1:], torch.zeros_like(mask[:, :1])], 1) == 0  # no next token
     adv = common.gae(rewards.T, values.T, next_values.T, end.T, torch.zeros_like(end.T), gamma,
@@ -293,19 +262,17 @@ def supervised_batch(train_pairs, cfg, rng):
 
 @torch.no_grad()
 def evaluate(model, pairs, cfg, n=None):
-    """Held-out true score (the judge's mean) and accuracy (the share of right answers), over
-    eval_samples answers to each prompt drawn from pi at temperature 1, with a generator of
-    their own (training's draws are not shifted)."""
-    prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.eval_samples, 0)
+    """Held-out true score (the judge's mean) and accuracy (the share of right answers) of K
+    answers a prompt (as grpo_addition.py samples G), drawn with a generator of their own."""
+    prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.answers_per_prompt, 0)
     seqs = sample(model, prompts, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed))
     scores = scores_of(seqs, cfg.digits)
     return scores.mean().item(), (scores == 1).float().mean().item()
 
 
 def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
-    """`epochs` passes of Adam over the pairs, shuffled, `batch` at a time: the reward model's
-    Bradley-Terry loss and DPO's both take (chosen, rejected) pairs. pair_loss(idx) -> the
-    loss of pairs idx; after_step(step, loss) logs."""
+    """`epochs` passes of Adam over the shuffled pairs, `batch` at a time, for the reward model
+    and DPO alike: pair_loss(idx) is the loss of pairs idx; after_step(step, loss) logs."""
     opt, step = torch.optim.Adam(model.parameters(), lr=lr), 0
     for epoch in range(epochs):
         for idx in torch.randperm(n_pairs, generator=gen).split(batch):
@@ -315,36 +282,6 @@ def fit_on_pairs(model, pair_loss, n_pairs, epochs, lr, batch, gen, after_step):
             opt.step()
             step += 1
             after_step(step, loss)
-
-
-def shift_to_zero(rm, seqs, P):
-    """Shift r so that the supervised model's answers `seqs` score 0 on average (Ziegler et
-    al. 2019, sec. 2; they also scale r to variance 1: not here, so beta weighs against r's
-    std). Returns r on those answers before the shift, and the shift."""
-    with torch.no_grad():
-        r_sft = sequence_score(rm, seqs, P)
-        shift = r_sft.mean()
-        rm.head.bias -= shift
-    return r_sft, shift
-
-
-def critic_start(cfg, reference, rm):
-    """V for PPO: a copy of the reward model (InstructGPT, Ouyang et al. 2022, sec. 3.5). For
-    --reward-from judge, the control, with no judge network to copy: the supervised model with
-    a zero head, V = 0, right on average on its answers (r is shifted to mean 0 there)."""
-    if cfg.reward_from != "judge":
-        return copy.deepcopy(rm).requires_grad_()
-    value_net = with_scalar_head(reference, cfg.d_model).requires_grad_()
-    torch.nn.init.zeros_(value_net.head.weight), torch.nn.init.zeros_(value_net.head.bias)
-    return value_net
-
-
-def implicit_reward_accuracy(dpo_policy, reference, y_w, y_l, P):
-    """DPO's held-out pair accuracy: how often its implicit reward, log pi(y|x) - log
-    pi_ref(y|x) (Rafailov et al. 2023, sec. 5), ranks y_w above y_l."""
-    with torch.no_grad():
-        w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P) for y in (y_w, y_l))
-    return (w > l).float().mean().item()
 
 
 def ppo_update(policy, value_net, opt, data, cfg, gen):
@@ -363,8 +300,7 @@ def ppo_update(policy, value_net, opt, data, cfg, gen):
 
 
 def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
-    """A progress.csv row, None where not measured; with a model to `check`, its held-out true
-    score and accuracy on 100 prompts, on a progress line."""
+    """A progress.csv row (None: not measured), with held-out figures of a model to `check`."""
     run.global_step += 1
     held = evaluate(check, held_out, cfg, 100) if check is not None else (None, None)
     run.update(dict(dict.fromkeys(LOGGED), phase=phase, **numbers, held_true=held[0],
@@ -372,27 +308,16 @@ def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
 
 
 def stage_done(result, name, model, held_out, cfg, start):
-    """After a stage: held-out true score and accuracy on all the held-out prompts, one line."""
+    """After a stage: held-out true score and accuracy on all the held-out prompts, one line.
+    Returns the time: the next stage's start."""
     score, accuracy = result["held"][name] = evaluate(model, held_out, cfg)
     print(f"{name}: held-out true score {score:.3f}, accuracy {accuracy:.3f} (took "
           f"{time.time() - start:.0f} s)", flush=True)
-
-
-LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
-              rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
-              kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
-              clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
-              held_accuracy=(".3f", "held-out accuracy"))  # progress.csv: (line format, label)
-SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
-             eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
-
-
-# ==== Training ============================================================================
+    return time.time()
 
 
 def train(cfg: Config):
-    """Supervise, rank, fit the reward model, PPO, then DPO. Returns a dict: run_dir, held
-    (held-out true score and accuracy after each stage), rm_accuracy, interrupted."""
+    """The stages. Returns run_dir, held (held-out figures by stage), rm_accuracy, interrupted."""
     torch.manual_seed(cfg.seed)  # the model's init
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
@@ -403,8 +328,7 @@ def train(cfg: Config):
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     result, nets = dict(run_dir=run.dir, held={}, rm_accuracy=None), dict(policy=policy)
 
-    # Ctrl-C ends training; either way, model.pt is saved as training left it
-    with run.saving_model(nets):
+    with run.saving_model(nets):  # Ctrl-C ends training; model.pt is saved as training left it
         # --- 1. supervised phase: imitate the labels, wrong ones included ---
         opt, start = torch.optim.Adam(policy.parameters(), lr=cfg.sft_lr), time.time()
         for step in range(1, cfg.sft_steps + 1):
@@ -415,19 +339,16 @@ def train(cfg: Config):
             log_row(run, held_out, cfg, "sft", loss=loss.item(),
                     check=policy if step % (20 * cfg.eval_every) == 0 else None)
         reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
-        stage_done(result, "supervised", policy, held_out, cfg, start)
-
+        start = stage_done(result, "supervised", policy, held_out, cfg, start)
         # --- 2. the judge ranks K answers to each prompt (held out: its true order, no flips) ---
-        start = time.time()
         seqs = sample(reference, prompts_of(rng.permutation(len(train_pairs))[:cfg.pair_prompts])
                       .repeat_interleave(K, 0), L, gen)
         judged = scores_of(seqs, cfg.digits)  # the supervised answers, judged
         chosen, rejected, _ = preference_pairs(seqs, judged, K, cfg.flip, rng)
         test = sample(reference, prompt_ids(held_out, cfg.digits).repeat_interleave(K, 0), L, gen)
         test_w, test_l, _ = preference_pairs(test, scores_of(test, cfg.digits), K, 0.0, rng)
-
         # --- 3. the reward model: r(x, y_w) above r(x, y_l), Bradley-Terry ---
-        rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model).requires_grad_(True)
+        rm = nets["reward_model"] = with_scalar_head(reference, cfg.d_model)
         logged = lambda step, loss: log_row(run, held_out, cfg, "rm", loss=loss.item())  # noqa
         fit_on_pairs(rm, lambda idx: bradley_terry_loss(sequence_score(rm, chosen[idx], P),
                                                         sequence_score(rm, rejected[idx], P)),
@@ -435,18 +356,18 @@ def train(cfg: Config):
         with torch.no_grad():  # held-out pair accuracy: r(x, y_w) > r(x, y_l), true order
             r_w, r_l = sequence_score(rm, test_w, P), sequence_score(rm, test_l, P)
             result["rm_accuracy"] = (r_w > r_l).float().mean().item()
-        r_sft, shift = shift_to_zero(rm, seqs, P)  # the supervised answers' r: 0 on average
+            r_sft = sequence_score(rm, seqs, P)  # r of the supervised answers, shifted to mean 0
+            rm.head.bias -= r_sft.mean()  # (Ziegler et al. 2019, sec. 2; not scaled to std 1)
         log_row(run, held_out, cfg, "rm", show=True, rm_accuracy=result["rm_accuracy"])
-        print(f"reward model: {len(chosen)} pairs ({cfg.flip:.0%} flipped), held-out pair "
-              f"accuracy {result['rm_accuracy']:.3f} on {len(test_w)} pairs; on the supervised "
-              f"answers r has std {r_sft.std():.2f}, the judge {judged.std():.3f} (took "
-              f"{time.time() - start:.0f} s)", flush=True)
-
+        print(f"reward model: {len(chosen)} pairs, {cfg.flip:.0%} flipped; held-out pair accuracy "
+              f"{result['rm_accuracy']:.3f} ({len(test_w)} pairs); supervised answers: r has std "
+              f"{r_sft.std():.2f}, the judge {judged.std():.3f} (took {time.time() - start:.0f} s)")
         # --- 4. PPO: sample, score, per-token rewards, GAE, clipped updates ---
-        # --reward-from judge, the control, changes only which answers pay more: the judge on
-        # r's scale (mean 0, r's std on the supervised answers), so beta weighs alike
-        judge = cfg.reward_from == "judge"
-        value_net = nets["value"] = critic_start(cfg, reference, rm)
+        # V starts as r (InstructGPT, Ouyang et al. 2022, sec. 3.5). --reward-from judge, the
+        # control: the judge on r's scale, so beta weighs alike, and V = 0 (no r to start from)
+        mean_j, std_j, std_r = judged.mean(), judged.std(), r_sft.std()  # on supervised answers
+        value_net = nets["value"] = (copy.deepcopy(rm) if cfg.reward_from == "model" else
+                                     with_scalar_head(reference, cfg.d_model, zero=True))
         opt, start = torch.optim.Adam([*policy.parameters(), *value_net.parameters()],
                                       lr=cfg.learning_rate), time.time()
         for step in range(1, cfg.ppo_steps + 1):
@@ -457,7 +378,7 @@ def train(cfg: Config):
             with torch.no_grad():
                 logp_old, logp_ref = token_logp(policy, seqs, P), token_logp(reference, seqs, P)
                 learned = sequence_score(rm, seqs, P)  # r(x, y), logged in either case
-                score = (truth - judged.mean()) / judged.std() * r_sft.std() if judge else learned
+                score = (truth - mean_j) / std_j * std_r if cfg.reward_from == "judge" else learned
                 values = value_net(seqs[:, :-1]).squeeze(-1)[:, P - 1:] * mask  # V(s_t), (B, L)
                 rewards, kl = per_token_rewards(score, logp_old, logp_ref, mask, cfg.beta)
                 adv, ret = token_advantages(rewards, values, mask, cfg.gamma, cfg.lam)
@@ -468,12 +389,10 @@ def train(cfg: Config):
             log_row(run, held_out, cfg, "ppo", check=None if step % cfg.eval_every else policy,
                     loss=loss_pi.item(), rm_score=learned.mean().item(), kl=kl.sum(1).mean().item(),
                     true_score=truth.mean().item(), loss_v=loss_v.item(), clipfrac=clipfrac.item())
-        stage_done(result, "PPO", policy, held_out, cfg, start)
-
+        start = stage_done(result, "PPO", policy, held_out, cfg, start)
         # --- 5. DPO: the supervised model again, the same pairs, no reward model ---
         if cfg.dpo:
-            dpo_policy, start = copy.deepcopy(reference).requires_grad_(True), time.time()
-            nets["dpo"] = dpo_policy
+            dpo_policy = nets["dpo"] = copy.deepcopy(reference).requires_grad_(True)
             with torch.no_grad():  # log pi_ref(y|x) of every pair's answers, once
                 ref_w, ref_l = (answer_logp(reference, y, P) for y in (chosen, rejected))
             logged = lambda step, loss: log_row(run, held_out, cfg, "dpo", loss=loss.item(),  # noqa
@@ -483,19 +402,19 @@ def train(cfg: Config):
                 ref_w[idx], ref_l[idx], cfg.dpo_beta), len(chosen), cfg.dpo_epochs, cfg.dpo_lr,
                 cfg.rm_batch, gen, logged)
             stage_done(result, "DPO", dpo_policy, held_out, cfg, start)
-            print("DPO's implicit reward: held-out pair accuracy "
-                  f"{implicit_reward_accuracy(dpo_policy, reference, test_w, test_l, P):.3f}")
+            with torch.no_grad():  # log pi(y|x) - log pi_ref(y|x), Rafailov et al. 2023, sec. 5
+                w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
+                        for y in (test_w, test_l))
+            print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
     else:
-        report.draw_logged(run, pictures(r_w - shift, r_l - shift))
+        report.draw_logged(run, pictures(r_w - r_sft.mean(), r_l - r_sft.mean()))
     return dict(result, interrupted=run.interrupted)
 
 
 def pictures(r_w, r_l):
-    """curve.png: each stage's numbers over its steps. inside.png: the reward model's scores
-    r_w, r_l of the held-out pairs' chosen and rejected answers, and the over-optimisation
-    picture: learned reward and true score of PPO's samples against their KL to pi_ref."""
+    """curve.png: each stage over its steps; inside.png: r on held-out pairs, PPO's over KL."""
     numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
     stages = [plots.lines(*numbers, title=name, where=("phase", name), xlabel="step")
               for name in ("sft", "rm", "ppo", "dpo")]
@@ -516,17 +435,17 @@ def main(argv=None):
             return report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         saved = checkpoints.load_checkpoint(cfg.eval, script=SCRIPT, required=("config",))
         print(f"{cfg.eval}:", flush=True)  # the run evaluated (runs/latest: the newest)
-        c = Config(**{**saved["config"], "eval": None, "gif": None})  # its task, its split
+        known = {k: v for k, v in saved["config"].items() if k in Config.__dataclass_fields__}
+        c = Config(**{**known, "eval": None, "gif": None})  # its task, its split
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
-        P, gen = 2 * c.digits + 2, torch.Generator().manual_seed(c.eval_seed)
         for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
                 c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
             seqs = sample(model, prompt_ids(held_out[:6], c.digits).repeat_interleave(6, 0),
-                          c.digits + 2, gen).view(6, 6, -1)  # 6 answers to each of 6 sums
-            for row in seqs:
-                print(f"{key:6} {decode(row[0, :P].tolist())} " + " ".join(f"{decode(s[P:])}"
-                      f"({v:.2f})" for s, v in zip(row.tolist(), scores_of(row, c.digits))))
+                          c.digits + 2, torch.Generator().manual_seed(c.eval_seed))
+            for row in seqs.view(6, 6, -1):  # 6 answers to each of 6 sums, the same draws
+                print(key, " ".join(f"{decode(s)}({v:.2f})"
+                                    for s, v in zip(row.tolist(), scores_of(row, c.digits))))
             print(f"{key}: held-out ({len(held_out)} prompts) true score %.3f, accuracy %.3f  "
                   "((n): the judge's hidden score)" % evaluate(model, held_out, c), flush=True)
 
