@@ -359,7 +359,6 @@ def train(cfg: Config):
     torch.manual_seed(cfg.seed)  # pi's samples and the minibatches: not shifted by the init
     env.action_space.seed(cfg.seed)  # the random warm-up actions
     buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
-    # H_target: -dim(A) unless set (Haarnoja et al. 2018b, table 1)
     target_entropy = -act_dim if cfg.target_entropy is None else cfg.target_entropy
     obs, _ = env.reset(seed=cfg.seed)
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every)
