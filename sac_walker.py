@@ -248,10 +248,10 @@ class Temperature(nn.Module):
 
 
 def td_target(reward, not_done, next_q1, next_q2, next_logp, alpha, gamma):
-    """The soft TD target, a' ~ pi(.|s') now, no future after a termination (not_done = 0):
+    """The soft TD target, a' ~ the current pi(.|s'), no future after a termination (not_done = 0):
         y = r + gamma * (min(Q1', Q2')(s', a') - alpha log pi(a'|s'))
-    (Haarnoja et al. 2018b, eqs. 2-3; the min: section 6). -log pi(a'|s') estimates the entropy
-    at s' from one sample: the target pays for being random there."""
+    (Haarnoja et al. 2018b, eqs. 2-3: the soft value V(s') = E[Q(s', a') - alpha log pi(a'|s')];
+    the min: section 6). -log pi(a'|s') is one sample of the entropy at s': randomness pays."""
     return reward + gamma * not_done * (torch.min(next_q1, next_q2) - alpha * next_logp)
 
 
