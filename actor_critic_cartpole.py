@@ -104,8 +104,7 @@ class Config(cli.SolvedFlags):
     """rewards are multiplied by this for learning (logged returns are not); none = 1 - gamma
     (1 when gamma = 1): true values in [0, 1], targets near it (the tutorial normalizes returns)"""
     lam: float | None = None
-    """none = the textbook n-step returns and A = R - V; a number in [0, 1] = GAE(lambda)
-    advantages instead (Schulman et al. 2016; 0.9 .. 0.97 usual)"""
+    """none: n-step returns, A = R - V; in [0, 1]: GAE(lam) (Schulman et al. 2016; 0.9 .. 0.97)"""
     norm_adv: bool = True
     """normalize advantages to mean 0, std 1 over each rollout"""
     ent_coef: float = 0.01

@@ -76,8 +76,7 @@ class QNetwork(nn.Module):
 
 @dataclass
 class Config(cli.SolvedFlags):
-    """The algorithm's settings (rl-zoo's CartPole-v1 DQN where no other reason is given); the
-    shared flags (--run-dir, --eval, --threads, ...) and the solved rule's: cli.SolvedFlags."""
+    """The algorithm's settings (rl-zoo's CartPole-v1 DQN unless said); shared: cli.SolvedFlags."""
     # --- experiment ---
     env_id: str = "CartPole-v1"
     """gymnasium id of an env with a Box observation and Discrete actions"""
@@ -86,32 +85,27 @@ class Config(cli.SolvedFlags):
     total_timesteps: int = 100_000
     """budget of env steps (rl-zoo: 50000); training stops when solved"""
     start_steps: int = 1000
-    """uniformly random actions for this many steps, which fill the buffer before learning
-    starts (at least batch_size; DDPG's name; rl-zoo's learning_starts: 1000)"""
+    """steps of random actions that fill the buffer before learning (>= batch_size; rl-zoo: 1000)"""
     # --- DQN ---
     buffer_size: int = 100_000
     """replay buffer capacity; the oldest transitions are overwritten"""
     batch_size: int = 64
     """transitions per gradient step (32 .. 256; Mnih et al.: 32)"""
     learning_rate: float = 5e-4
-    """Adam step size (1e-4 .. 3e-3; rl-zoo: 2.3e-3, with which Q diverged when the target
-    was copied every 32 gradient steps)"""
+    """Adam step size (1e-4 .. 3e-3; rl-zoo's 2.3e-3 made Q diverge with a copy every 32 steps)"""
     gamma: float = 0.99
-    """discount factor (0.98 .. 0.999); 0.99 looks about 100 steps ahead (with 0.98, 50
-    steps, three of five seeds did not solve)"""
+    """discount factor (0.98 .. 0.999); 0.99: about 100 steps ahead (0.98: 3 of 5 seeds failed)"""
     train_freq: int = 256
     """env steps between learning phases (Mnih et al.: 4)"""
     gradient_steps: int = 128
     """minibatch steps in each learning phase (Mnih et al.: 1)"""
     target_update_interval: int = 64
-    """gradient steps between copies of the network into the target (Mnih et al.: 10000; rl-zoo's
-    10 env steps amount to 128: once a phase). Each copy lets Q look about one step further: two a
-    phase build Q twice as fast; every 32, Q diverged"""
+    """gradient steps between copies of the network into the target (Mnih et al.: 10000); each
+    copy lets Q look a step further: twice a phase builds Q fast; every 32, Q diverged"""
     eps_start: float = 1.0
     """epsilon of epsilon-greedy at step 0"""
     eps_end: float = 0.01
-    """epsilon after the decay, to the end (0.01 .. 0.1; rl-zoo's 0.04 kept the training
-    episodes, which the solved rule averages, far below the greedy policy's returns)"""
+    """final epsilon (0.01 .. 0.1; rl-zoo's 0.04 left the training returns far below greedy's)"""
     exploration_steps: int = 8000
     """env steps of epsilon's linear fall from eps_start to eps_end (rl-zoo: 0.16 x 50000)"""
     max_grad_norm: float = 10.0
@@ -121,8 +115,7 @@ class Config(cli.SolvedFlags):
     double: bool = False
     """Double DQN (van Hasselt et al. 2016): the network picks a', the target network values it"""
     q_check_every: int = 10
-    """learning phases between the checks of Q against the return (inside.png): the greedy
-    policy plays 2 episodes of at most 1000 steps"""
+    """learning phases between checks of Q against the return: 2 greedy episodes of <= 1000 steps"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks

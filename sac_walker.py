@@ -2,21 +2,18 @@
 Applications"): TD3's twin critics with a stochastic actor that is paid for its entropy.
 
 Read after td3_walker.py; `diff td3_walker.py sac_walker.py` shows what SAC changes:
-  1. the actor is a Gaussian squashed by tanh into the action box; its samples are
-     differentiable in its weights (reparameterisation, Actor.sample), and log pi(a|s) needs
-     the squash's correction (squashed_log_prob);
-  2. the soft TD target: the smaller target critic at a' ~ pi(.|s'), minus alpha log pi(a'|s')
-     (td_target). a' comes from the current policy: no target actor, no target smoothing;
-  3. the actor maximises min(Q1, Q2) + alpha * entropy (compute_loss_actor), every step;
-  4. alpha is learned so that the entropy stays near a target, -dim(A) (compute_loss_alpha);
-     --alpha 0.2 fixes it instead, as SAC's first version did.
+  1. the actor is a tanh-squashed Gaussian, sampled with reparameterisation (Actor.sample);
+     its log pi(a|s) is corrected for the squash (squashed_log_prob);
+  2. the soft TD target: min Q' - alpha log pi at a' ~ pi(.|s'), no target actor (td_target);
+  3. the actor maximises min(Q1, Q2) + alpha * entropy, every step (compute_loss_actor);
+  4. alpha is learned to hold the entropy near -dim(A) (compute_loss_alpha); --alpha fixes it.
 It explores with its own samples, not with added noise. The loop in train(), top to bottom:
 
     act      random for start_steps steps, then a ~ pi(.|s)
     store    (s, a, r, s', terminated) in the replay buffer; a time-limit
              truncation is NOT terminal, so its target still bootstraps
-    learn    one step of both critics on a random minibatch, one of the actor and one of
-             alpha, then the target critics move a fraction tau toward the critics
+    learn    on a random minibatch, one step each of the critics, the actor and alpha;
+             then the target critics move a fraction tau toward the critics
     evaluate every eval_every steps (once in the warm-up): 10 episodes of tanh(mean), no sampling
 
 The run folder: evaluations.csv, episodes.csv, model.pt (the last actor), best.pt, best.gif,
@@ -60,8 +57,7 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 class Actor(nn.Module):
-    """pi(a|s): a Gaussian over u with a mean and a log sigma per action dimension, squashed by
-    tanh into the action box: a = bias + scale * tanh(u)  (Haarnoja et al. 2018b, appendix C)."""
+    """pi(a|s): a Gaussian over u, squashed into the action box: a = bias + scale * tanh(u)."""
 
     LOG_STD_MIN, LOG_STD_MAX = -20.0, 2.0  # log sigma is clipped here (the authors' code)
 
@@ -93,12 +89,10 @@ class Actor(nn.Module):
 
 
 def squashed_log_prob(u_dist, u, scale):
-    """log pi(a|s) of a = bias + scale * tanh(u), u ~ u_dist: by the change of variables, the
-    Gaussian's log density minus the log of the squash's slope da/du, summed over dimensions
-    (Haarnoja et al. 2018b, appendix C, eq. 26, there with scale 1):
+    """log pi(a|s) of a = bias + scale * tanh(u), u ~ u_dist: the Gaussian's log density minus
+    log da/du, by the change of variables (Haarnoja et al. 2018b, appendix C, eq. 26):
         log pi(a|s) = sum_i [log N(u_i; mean_i, sigma_i) - log(scale_i * (1 - tanh(u_i)^2))]
-    log(1 - tanh(u)^2) is computed as 2 * (log 2 - u - softplus(-2u)), the same number, which
-    does not round to log(0) once |u| > ~9 as 1 - tanh(u)^2 does in float32."""
+    log(1 - tanh(u)^2) as 2 * (log 2 - u - softplus(-2u)): no log(0) in float32 once |u| > ~9."""
     log_slope = torch.log(scale) + 2 * (math.log(2) - u - F.softplus(-2 * u))
     return (u_dist.log_prob(u) - log_slope).sum(-1)  # (B,): one number per action vector
 
@@ -151,12 +145,10 @@ class Config(cli.CheckpointFlags):
     buffer_size: int = 1_000_000
     """replay buffer capacity; the oldest transitions are overwritten"""
     eval_every: int = 5000
-    """evaluate tanh(mean) (and save model.pt) every this many env steps; during the random
-    warm-up only once, as the untrained baseline (tutorial 003: 5000)"""
+    """env steps between evaluations of tanh(mean), which save model.pt (tutorial 003: 5000)"""
     # --- the temperature alpha, the entropy's weight (section 5 of the paper) ---
     alpha: float | None = None
-    """none: learned, from 1, so that the entropy stays near target_entropy (the paper's
-    default); a number > 0 fixes it (SAC's first version: 1 with rewards x 5 on Walker2d, 0.2)"""
+    """none: learned, from 1, toward target_entropy (the paper); > 0: fixed there (SAC v1: 0.2)"""
     alpha_lr: float = 3e-4
     """Adam step size of log alpha, when alpha is learned (3e-4)"""
     target_entropy: float | None = None
@@ -230,8 +222,6 @@ class ReplayBuffer:
 def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
     """Store (s, a, r, s', terminated) and return the obs the next action is chosen in: s', or
     a new episode's first obs once this one has ended (one env, reset by hand: no autoreset)."""
-    # terminated, not (terminated or truncated): a time-limit truncation is not terminal, so
-    # its target still bootstraps from s' (see ReplayBuffer.add)
     buffer.add(obs, action, reward, next_obs, terminated)
     if terminated or truncated:  # the episode is over either way: the next one starts afresh
         next_obs, _ = env.reset()
@@ -258,18 +248,16 @@ class Temperature(nn.Module):
 
 
 def td_target(reward, not_done, next_q1, next_q2, next_logp, alpha, gamma):
-    """The soft TD target, a' ~ pi(.|s') drawn from the current policy, no future after a
-    termination (not_done = 0):  y = r + gamma * (min(Q1', Q2')(s', a') - alpha log pi(a'|s'))
-    (Haarnoja et al. 2018b, eqs. 2-3, the soft value V(s') = E[Q(s', a') - alpha log pi(a'|s')];
-    the min of two critics: its section 6, as TD3's). -log pi(a'|s') is a one-sample estimate
-    of the entropy at s': the target pays for being random there."""
+    """The soft TD target, a' ~ the current pi(.|s'), no future after a termination (not_done = 0):
+        y = r + gamma * (min(Q1', Q2')(s', a') - alpha log pi(a'|s'))
+    (Haarnoja et al. 2018b, eqs. 2-3: the soft value V(s') = E[Q(s', a') - alpha log pi(a'|s')];
+    the min: section 6). -log pi(a'|s') is one sample of the entropy at s': randomness pays."""
     return reward + gamma * not_done * (torch.min(next_q1, next_q2) - alpha * next_logp)
 
 
 def compute_loss_actor(actor, critic, critic2, obs, alpha):
     """J_pi = mean [alpha * log pi(a|s) - min(Q1(s, a), Q2(s, a))], a ~ pi(.|s) reparameterised
-    (Haarnoja et al. 2018b, eq. 9, with the min of section 6): higher Q and higher entropy
-    (-log pi) both lower it. The states come from the buffer, the actions are new samples.
+    (Haarnoja et al. 2018b, eq. 9, with section 6's min): higher Q and entropy both lower it.
     Returns the loss and log pi(a|s) (B,), which the temperature's loss reuses."""
     action, logp = actor.sample(obs)
     q = torch.min(critic(obs, action), critic2(obs, action))
@@ -277,9 +265,8 @@ def compute_loss_actor(actor, critic, critic2, obs, alpha):
 
 
 def compute_loss_alpha(temperature, logp, target_entropy):
-    """J(alpha) = mean [-alpha * (log pi(a|s) + H_target)]  (Haarnoja et al. 2018b, eq. 18),
-    log pi a constant (detached). Entropy -log pi below its target: the bracket is positive,
-    descending J raises alpha, and entropy is paid more; above it, alpha falls."""
+    """J(alpha) = mean [-alpha * (log pi(a|s) + H_target)], log pi detached (Haarnoja et al.
+    2018b, eq. 18): entropy below its target makes the bracket positive; descent raises alpha."""
     return -(temperature() * (logp.detach() + target_entropy)).mean()
 
 
@@ -291,8 +278,7 @@ def update_critics(nets, batch, cfg):
         y = td_target(reward, not_done, nets["critic_target"](next_obs, next_action),
                       nets["critic2_target"](next_obs, next_action), next_logp,
                       nets["temperature"](), cfg.gamma)
-    # L = mean (y - Q1(s, a))^2 + mean (y - Q2(s, a))^2  (Haarnoja et al. 2018b, eq. 5, for
-    # each critic; without its 1/2, which Adam's steps do not see)
+    # L = mean (y - Q1(s, a))^2 + mean (y - Q2(s, a))^2  (Haarnoja et al. 2018b, eq. 5, less 1/2)
     critic_loss = (F.mse_loss(nets["critic"](obs, action), y)
                    + F.mse_loss(nets["critic2"](obs, action), y))
     nets["critic_opt"].zero_grad()
@@ -373,7 +359,6 @@ def train(cfg: Config):
     torch.manual_seed(cfg.seed)  # pi's samples and the minibatches: not shifted by the init
     env.action_space.seed(cfg.seed)  # the random warm-up actions
     buffer = ReplayBuffer(obs_dim, act_dim, min(cfg.buffer_size, cfg.total_timesteps), device)
-    # H_target: -dim(A) unless set (Haarnoja et al. 2018b, table 1)
     target_entropy = -act_dim if cfg.target_entropy is None else cfg.target_entropy
     obs, _ = env.reset(seed=cfg.seed)
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every)
@@ -406,8 +391,7 @@ def train(cfg: Config):
             if terminated or truncated:
                 run.episode_ended(global_step, info["episode"]["r"])  # its return, episodes.csv
 
-            # --- learn: one gradient step of the critics, the actor and alpha per env step
-            # (Haarnoja et al. 2018b, Algorithm 1 and table 1) ---
+            # --- learn: one step of the critics, the actor and alpha per env step (Algorithm 1) ---
             if learning:
                 batch = buffer.sample(cfg.batch_size)
                 critic_loss = update_critics(nets, batch, cfg)
@@ -417,8 +401,7 @@ def train(cfg: Config):
             run.progress(global_step, losses, (nets["actor"], nets["critic"], nets["critic2"],
                                                nets["temperature"]))  # nan/inf: stop
 
-            # --- evaluate: the mean action tanh(mean), no sampling, every eval_every steps;
-            # during the random warm-up only the first time, as the untrained baseline ---
+            # --- evaluate tanh(mean), no sampling, every eval_every steps; in the warm-up once ---
             if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):
                 seen = []  # the evaluation's states and rewards: Q1(s, a) against the return
                 returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
