@@ -97,11 +97,15 @@ def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_same_seed_same_logs(script, tmp_path):
-    runs = [script.train(smoke(script, tmp_path / str(i), curves=False, gifs=False))["run_dir"]
-            for i in range(2)]
-    for name in LOGS:
-        if (runs[0] / name).exists():
-            assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
+    """Same seed, same bytes in every log; another seed, another progress (the seed is used)."""
+    seed = script.Config().seed
+    runs = [script.train(smoke(script, tmp_path / str(i), curves=False, gifs=False,
+                               seed=seed + (i == 2)))["run_dir"] for i in range(3)]
+    logs = [name for name in LOGS if (runs[0] / name).exists()]
+    assert logs
+    for name in logs:
+        assert (runs[0] / name).read_bytes() == (runs[1] / name).read_bytes(), name
+    assert [(runs[0] / n).read_bytes() for n in logs] != [(runs[2] / n).read_bytes() for n in logs]
 
 
 def test_ctrl_c_is_one_line_exit_130_and_keeps_its_files(script, tmp_path):
@@ -110,6 +114,9 @@ def test_ctrl_c_is_one_line_exit_130_and_keeps_its_files(script, tmp_path):
                                after="step")
     assert code == 130, (out, err)
     assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
+    assert "interrupted" in out + err, (out, err)
     (run,) = tmp_path.iterdir()
     names = {p.name for p in run.iterdir()}
     assert "model.pt" in names and not any(".tmp" in n for n in names), names
+    if "progress.csv" in names:  # a row per update: the one the progress line showed is kept
+        assert len((run / "progress.csv").read_text().splitlines()) >= 2
