@@ -128,3 +128,5 @@ def test_ctrl_c_is_one_line_exit_130_and_keeps_its_files(script, tmp_path):
     assert "model.pt" in names and not any(".tmp" in n for n in names), names
     if "progress.csv" in names:  # a row per update: the one the progress line showed is kept
         assert len((run / "progress.csv").read_text().splitlines()) >= 2
+    last = out.strip().splitlines()[-1]
+    assert last.startswith("interrupted") and str(run) in last, out  # says where its files are
