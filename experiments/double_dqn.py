@@ -58,5 +58,5 @@ def more(curves, folder, settings):
 
 
 if __name__ == "__main__":
-    lab.main("double_dqn", dqn_cartpole, VARIANTS, budget=50_000, quick_budget=2560,
-             panels=PANELS, more=more, quick_settings=dict(q_check_every=2))
+    lab.main("double_dqn", dqn_cartpole, VARIANTS, budget=50_000, quick_budget=1500,
+             panels=PANELS, more=more, quick_settings=dict(q_check_every=2, start_steps=500))

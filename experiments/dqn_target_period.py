@@ -28,4 +28,5 @@ PANELS = [("q_greedy", "Q(s, argmax Q): the network's estimate (log)", True),  #
 
 if __name__ == "__main__":
     lab.main("dqn_target_period", dqn_cartpole, VARIANTS, seeds=(0, 1, 2), budget=50_000,
-             quick_budget=2560, panels=PANELS, quick_settings=dict(q_check_every=2))
+             quick_budget=1500, panels=PANELS,
+             quick_settings=dict(q_check_every=2, start_steps=500))

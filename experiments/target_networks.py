@@ -28,5 +28,6 @@ PANELS = [("q_estimate", "Q(s, mu(s)): the critic's estimate", False),
 
 if __name__ == "__main__":
     lab.main("target_networks", ddpg_walker, VARIANTS, budget=20_000, solved=1000.0,
-             what="evaluation return (no noise)", quick_budget=2500, panels=PANELS,
+             what="evaluation return (no noise)", quick_budget=1200,
+             quick_settings=dict(start_steps=600, eval_every=600), panels=PANELS,
              **lab.DDPG_IN_MINUTES)
