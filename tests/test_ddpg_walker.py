@@ -182,11 +182,12 @@ def test_the_warm_up_is_evaluated_once_then_every_eval_every(tmp_path, capsys):
     assert "from step 1250 on, every 1250 steps" in out and "warm-up" not in out.split("\n")[1]
 
 
-def test_eval_gif_writes_a_gif_of_a_saved_actor_without_a_display(tmp_path):
+def test_eval_gif_writes_a_gif_of_a_saved_actor_without_a_display(tmp_path, capsys):
     first = ddpg.train(small(tmp_path, total_timesteps=400, start_steps=300, eval_every=400,
                              eval_episodes=1, gifs=False, curves=False))
     out = tmp_path / "walker.gif"
-    p = run_script("ddpg_walker.py", "--eval", first["run_dir"] / "best.pt", "--gif", out)
+    p = run_main("ddpg_walker.py", "--eval", first["run_dir"] / "best.pt", "--gif", out,
+                 capsys=capsys)
     assert p.returncode == 0, p.stderr
     frames = iio.imread(out)
     assert frames.ndim == 4 and frames.shape[0] >= 2 and frames[0].std() > 10
@@ -463,17 +464,18 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle, capsys):
     assert sorted(tmp_path.iterdir()) == [bad]  # no run folder left behind
 
 
-def test_eval_of_a_checkpoint_says_it_is_for_resume_and_gif_needs_a_gif_name(tmp_path):
+def test_eval_of_a_checkpoint_says_it_is_for_resume_and_gif_needs_a_gif_name(tmp_path, capsys):
     """--eval RUN/checkpoint.pt names what the file is for; --gif OUT.png is refused, not
     written as a GIF under a .png name. Each: one line, exit 2, nothing written."""
     run = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
                            start_steps=200, eval_every=300, eval_episodes=1,
                            gifs=False))["run_dir"]
-    p = run_script("ddpg_walker.py", "--eval", run / "checkpoint.pt", timeout=120)
+    capsys.readouterr()
+    p = run_main("ddpg_walker.py", "--eval", run / "checkpoint.pt", capsys=capsys)
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert f"for --resume {run}" in p.stderr
-    p = run_script("ddpg_walker.py", "--eval", run / "model.pt", "--gif", tmp_path / "out.png",
-                   timeout=120)
+    p = run_main("ddpg_walker.py", "--eval", run / "model.pt", "--gif", tmp_path / "out.png",
+                 capsys=capsys)
     assert p.returncode == 2 and "ends in .gif" in p.stderr, p.stderr
     assert not (tmp_path / "out.png").exists()
 
@@ -492,8 +494,8 @@ def test_missing_mujoco_is_one_clear_line(tmp_path):
 # tests/test_exercises.py: stage (c) of its exercises, with the script's own functions.
 
 
-def test_help_of_the_real_script():
-    p = run_script("ddpg_walker.py", "--help", timeout=120)
+def test_help_shows_the_exploration_noise(capsys):
+    p = run_main("ddpg_walker.py", "--help", capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert "--threads" in p.stdout and "--expl-noise" in p.stdout
 

@@ -12,7 +12,7 @@ import pytest
 import torch
 
 import sac_walker as sac
-from conftest import ROOT, interrupt, run_main, run_script
+from conftest import ROOT, interrupt, run_main
 from test_ddpg_walker import PENDULUM, pendulum_flags, play
 
 
@@ -188,7 +188,7 @@ def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
             assert all(torch.equal(b[key]["state"][i][k], v) for k, v in state.items()), key
 
 
-def test_eval_replays_the_saved_actor_and_inside_png_has_the_entropy(tmp_path):
+def test_eval_replays_the_saved_actor_and_inside_png_has_the_entropy(tmp_path, capsys):
     """--eval of model.pt plays tanh(mean) without sampling: the last evaluation's returns;
     evaluations.csv has SAC's entropy, its target and alpha, which inside.png draws."""
     import csv
@@ -206,8 +206,8 @@ def test_eval_replays_the_saved_actor_and_inside_png_has_the_entropy(tmp_path):
     assert float(row["target_entropy"]) == -1 and 0 < float(row["alpha"]) < 1
     assert np.isfinite(float(row["entropy"]))
     assert_curve_drawn(run / "inside.png")
-    p = run_script("sac_walker.py", "--eval", run / "model.pt", "--eval-episodes", 2,
-                   timeout=120)
+    p = run_main("sac_walker.py", "--eval", run / "model.pt", "--eval-episodes", 2,
+                 capsys=capsys)
     assert p.returncode == 0 and "mean" in p.stdout, p.stderr
 
 
@@ -238,7 +238,7 @@ def test_learns_inverted_pendulum_with_a_fixed_seed():
     assert [e["eval_mean"] for e in evaluations[-check.HOLD:]] == [1000] * check.HOLD
 
 
-def test_help_shows_the_temperature():
-    p = run_script("sac_walker.py", "--help", timeout=120)
+def test_help_shows_the_temperature(capsys):
+    p = run_main("sac_walker.py", "--help", capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert all(flag in p.stdout for flag in ("--alpha", "--alpha-lr", "--target-entropy"))

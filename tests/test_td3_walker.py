@@ -10,7 +10,7 @@ import pytest
 import torch
 
 import td3_walker as td3
-from conftest import ROOT, interrupt, run_main, run_script
+from conftest import ROOT, interrupt, run_main
 from test_ddpg_walker import PENDULUM, pendulum_flags, play
 
 
@@ -116,8 +116,8 @@ def test_learns_inverted_pendulum_with_a_fixed_seed():
     assert [e["eval_mean"] for e in evaluations[-check.HOLD:]] == [1000] * check.HOLD
 
 
-def test_help_shows_the_three_fixes():
-    p = run_script("td3_walker.py", "--help", timeout=120)
+def test_help_shows_the_three_fixes(capsys):
+    p = run_main("td3_walker.py", "--help", capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert all(flag in p.stdout for flag in ("--policy-delay", "--target-noise", "--noise-clip"))
 
