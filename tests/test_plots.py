@@ -10,7 +10,7 @@ import torch
 
 import cartpole_env
 import ppo_cartpole as ppo
-from conftest import ROOT, run_script
+from conftest import ROOT, run_main
 from test_cartpole_scripts import assert_curve_drawn
 
 
@@ -47,24 +47,25 @@ def test_tensorboard_missing_is_one_clear_line(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_compare_overlays_three_runs_into_one_png(tmp_path):
+def test_compare_overlays_three_runs_into_one_png(tmp_path, capsys):
     runs = [quick_run(tmp_path / "runs", seed, curves=False)["run_dir"] for seed in range(3)]
     out = tmp_path / "compare.png"
-    p = run_script("plots.py", *runs, "--out", out)
+    p = run_main("plots.py", *runs, "--out", out, capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert_curve_drawn(out)
     assert [f.name for f in tmp_path.iterdir() if f.suffix == ".png"] == ["compare.png"]
 
 
-def test_compare_leaves_out_a_folder_that_is_not_a_run(tmp_path):
+def test_compare_leaves_out_a_folder_that_is_not_a_run(tmp_path, capsys):
     """`python plots.py runs/*` once an experiment has run: runs/experiments is left out with a
     note, the runs are drawn; with no run at all, one line and exit 2."""
-    p = run_script("plots.py", tmp_path)
+    p = run_main("plots.py", tmp_path, capsys=capsys)
     assert p.returncode == 2 and "is not a run folder" in p.stderr and "Traceback" not in p.stderr
     assert "none of these folders is a run" in p.stderr
     run = quick_run(tmp_path / "runs", seed=0)["run_dir"]
     (tmp_path / "runs" / "experiments").mkdir()
-    p = run_script("plots.py", *sorted((tmp_path / "runs").iterdir()), "--out", tmp_path / "c.png")
+    p = run_main("plots.py", *sorted((tmp_path / "runs").iterdir()), "--out", tmp_path / "c.png",
+                 capsys=capsys)
     assert p.returncode == 0 and "experiments is not a run folder" in p.stderr, p.stderr
     assert_curve_drawn(tmp_path / "c.png") and run.exists()
 
@@ -95,7 +96,7 @@ def fake_ddpg_run(root, env_id, last_step):
     return run
 
 
-def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path):
+def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path, capsys):
     """`plots.py runs/*` with CartPole runs of two lengths and a Walker2d run: a panel per
     env, each labelled with what it plots; no line goes on past the end of the runs it
     is drawn from (a run that stopped is not stretched to the longest)."""
@@ -122,7 +123,7 @@ def test_compare_draws_one_panel_per_env_and_no_run_past_its_end(tmp_path):
             assert list(y) == list(curves[long]["recent_return"])
     walker_x = [line.get_xdata() for line in panels["Walker2d-v5"].lines if len(line.get_xdata())]
     assert [x.max() for x in walker_x] == [60_000]
-    p = run_script("plots.py", short, long, walker, "--out", tmp_path / "compare.png")
+    p = run_main("plots.py", short, long, walker, "--out", tmp_path / "compare.png", capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert_curve_drawn(tmp_path / "compare.png")
 
@@ -145,7 +146,7 @@ def test_ctrl_c_while_curve_png_is_written_keeps_the_old_one_and_no_tmp(tmp_path
 
 
 
-def test_maps_of_several_runs_side_by_side(tmp_path):
+def test_maps_of_several_runs_side_by_side(tmp_path, capsys):
     """Each CartPole run keeps its maps in maps.npz; --maps draws the trained ones, a row per
     run, and refuses a folder without them in one line."""
     import importlib
@@ -159,12 +160,13 @@ def test_maps_of_several_runs_side_by_side(tmp_path):
         maps = np.load(runs[-1] / "maps.npz")
         assert maps["trained_value"].shape == maps["untrained_policy"].shape == (41, 41)
     out = tmp_path / "maps.png"
-    p = run_script("plots.py", "--maps", *runs, "--out", out)
+    p = run_main("plots.py", "--maps", *runs, "--out", out, capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert_curve_drawn(out)
-    bad = run_script("plots.py", "--maps", tmp_path)
+    bad = run_main("plots.py", "--maps", tmp_path, capsys=capsys)
     assert bad.returncode == 2 and "none of these runs has a maps.npz" in bad.stderr
-    skipped = run_script("plots.py", "--maps", *runs, tmp_path, "--out", out)  # one without
+    skipped = run_main("plots.py", "--maps", *runs, tmp_path, "--out", out,  # one without
+                       capsys=capsys)
     assert skipped.returncode == 0 and f"{tmp_path} has no maps.npz" in skipped.stderr
 
 
