@@ -2,8 +2,7 @@
 Applications"): TD3's twin critics with a stochastic actor that is paid for its entropy.
 
 Read after td3_walker.py; `diff td3_walker.py sac_walker.py` shows what SAC changes:
-  1. the actor is a tanh-squashed Gaussian, sampled with reparameterisation (Actor.sample);
-     its log pi(a|s) is corrected for the squash (squashed_log_prob);
+  1. the actor is a tanh-squashed Gaussian, reparameterised (Actor.sample, squashed_log_prob);
   2. the soft TD target: min Q' - alpha log pi at a' ~ pi(.|s'), no target actor (td_target);
   3. the actor maximises min(Q1, Q2) + alpha * entropy, every step (compute_loss_actor);
   4. alpha is learned to hold the entropy near -dim(A) (compute_loss_alpha); --alpha fixes it.
