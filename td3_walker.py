@@ -105,7 +105,7 @@ class Config(cli.CheckpointFlags):
     gamma: float = 0.99
     """discount factor (0.98 .. 0.995)"""
     tau: float = 0.005
-    """target networks move this fraction toward the networks at each target update (0.001 .. 0.01)"""
+    """the targets move this fraction toward the networks at each target update (0.001 .. 0.01)"""
     actor_lr: float = 3e-4
     """Adam step size of the actor (DDPG paper and tutorial: 1e-4; OurDDPG.py: 3e-4)"""
     critic_lr: float = 3e-4
