@@ -152,7 +152,7 @@ class ReplayBuffer:
         self.reward = torch.zeros(max_size, device=device)             # r   (max_size,)
         self.next_obs = torch.zeros(max_size, obs_dim, device=device)  # s'  (max_size, obs_dim)
         self.not_done = torch.zeros(max_size, device=device)           # 1 - terminated  (max_size,)
-        self.max_size, self.ptr, self.size = max_size, 0, 0  # as in tutorial 003
+        self.max_size, self.ptr, self.size = max_size, 0, 0  # ptr: the next slot (tutorial 003)
 
     def add(self, obs, action, reward, next_obs, terminated):
         i = self.ptr
