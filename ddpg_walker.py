@@ -7,14 +7,10 @@ Gaussian exploration noise, random actions for the first start_steps steps,
 and an evaluation every 5000 steps over 10 episodes. The loop in train(), top to bottom:
 
     act      random for start_steps steps, then mu(s) + Gaussian noise
-    store    (s, a, r, s', terminated) in the replay buffer; a time-limit
-             truncation is NOT terminal, so its target still bootstraps
+    store    (s, a, r, s', terminated) in the buffer; a time-limit truncation still bootstraps
     learn    one critic and one actor step on a random minibatch, then the
              targets move a fraction tau toward the networks
     evaluate every eval_every steps (once in the warm-up): 10 episodes of mu(s), no noise
-
-The run folder: evaluations.csv, episodes.csv, model.pt (the last actor), best.pt, best.gif,
-curve.png, inside.png, and checkpoint.pt, from which --resume continues the run exactly.
 
     python ddpg_walker.py                         # 1M steps: several hours on a CPU
     python ddpg_walker.py --resume runs/latest     # continue a stopped or killed run exactly
@@ -86,8 +82,7 @@ class Critic(nn.Module):
 
 @dataclass
 class Config(cli.CheckpointFlags):
-    """The algorithm's settings; the flags every script shares (--run-dir, --eval, --threads,
-    --cuda, ...), --checkpoint-every and --resume come from cli.CheckpointFlags."""
+    """The algorithm's settings; the flags all scripts share and --resume: cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env (Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5)"""
@@ -96,8 +91,7 @@ class Config(cli.CheckpointFlags):
     total_timesteps: int = 1_000_000
     """env steps to train for (the tutorial and the TD3 paper: 1M)"""
     start_steps: int = 25_000
-    """uniformly random actions for this many steps before the actor acts and learning
-    starts (the TD3 authors' code: 25k; their paper: 1k on Walker2d; at least batch_size)"""
+    """random actions for this many steps, then the actor acts and learns (>= batch_size)"""
     # --- DDPG ---
     expl_noise: float = 0.1
     """std of the Gaussian exploration noise, a share of the action box's half-width (0.1 .. 0.3)"""
@@ -106,7 +100,7 @@ class Config(cli.CheckpointFlags):
     gamma: float = 0.99
     """discount factor (0.98 .. 0.995)"""
     tau: float = 0.005
-    """target networks move this fraction toward the networks at each target update (0.001 .. 0.01)"""
+    """the targets move this fraction toward the networks at each target update (0.001 .. 0.01)"""
     actor_lr: float = 3e-4
     """Adam step size of the actor (DDPG paper and tutorial: 1e-4; OurDDPG.py: 3e-4)"""
     critic_lr: float = 3e-4
@@ -116,8 +110,7 @@ class Config(cli.CheckpointFlags):
     buffer_size: int = 1_000_000
     """replay buffer capacity; the oldest transitions are overwritten"""
     eval_every: int = 5000
-    """evaluate mu(s) without noise (and save model.pt) every this many env steps; during the
-    random warm-up only once, as the untrained baseline (tutorial 003: 5000)"""
+    """env steps between evaluations of mu(s), no noise, which save model.pt (tutorial 003: 5000)"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -138,8 +131,7 @@ class Config(cli.CheckpointFlags):
 
 
 class ReplayBuffer:
-    """A ring of the last `max_size` transitions, a tensor per field, on the training device:
-    a minibatch is one index into each field (no numpy -> torch per batch, no copy to a GPU)."""
+    """A ring of the last `max_size` transitions, one tensor per field, on the training device."""
 
     def __init__(self, obs_dim, act_dim, max_size, device):
         self.obs = torch.zeros(max_size, obs_dim, device=device)       # s   (max_size, obs_dim)
@@ -147,8 +139,7 @@ class ReplayBuffer:
         self.reward = torch.zeros(max_size, device=device)             # r   (max_size,)
         self.next_obs = torch.zeros(max_size, obs_dim, device=device)  # s'  (max_size, obs_dim)
         self.not_done = torch.zeros(max_size, device=device)           # 1 - terminated  (max_size,)
-        # as in tutorial 003: ptr, where the next transition goes; size, how many are stored
-        self.max_size, self.ptr, self.size = max_size, 0, 0
+        self.max_size, self.ptr, self.size = max_size, 0, 0  # ptr: the next slot (tutorial 003)
 
     def add(self, obs, action, reward, next_obs, terminated):
         i = self.ptr
@@ -156,8 +147,7 @@ class ReplayBuffer:
         self.action[i] = torch.as_tensor(action)
         self.reward[i] = float(reward)
         self.next_obs[i] = torch.as_tensor(next_obs)
-        # not_done = 0 only when the episode really ended. A time-limit truncation keeps
-        # not_done = 1: the state was not terminal, so its target bootstraps from Q(s', mu(s')).
+        # not_done = 0 only if the episode really ended: a time-limit truncation still bootstraps
         self.not_done[i] = 0.0 if terminated else 1.0
         self.ptr = (self.ptr + 1) % self.max_size  # wrap around: overwrite the oldest
         self.size = min(self.size + 1, self.max_size)
@@ -185,13 +175,10 @@ class ReplayBuffer:
 
 
 def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
-    """Store (s, a, r, s', terminated) and return the obs the next action is chosen in: s', or
-    a new episode's first obs once this one has ended (one env, reset by hand: no autoreset)."""
-    # terminated, not (terminated or truncated): a time-limit truncation is not terminal, so
-    # its target still bootstraps from s' (see ReplayBuffer.add)
+    """Store (s, a, r, s', terminated); return s', or a new episode's first obs after the end."""
     buffer.add(obs, action, reward, next_obs, terminated)
     if terminated or truncated:  # the episode is over either way: the next one starts afresh
-        next_obs, _ = env.reset()
+        next_obs, _ = env.reset()  # one env, reset by hand: no autoreset
     return next_obs  # obs = next_obs: the transition is stored; the next action starts here
 
 
@@ -230,8 +217,7 @@ def ddpg_update(actor, critic, actor_target, critic_target, actor_opt, critic_op
 
     actor_loss = compute_loss_actor(actor, critic, obs)
     actor_opt.zero_grad()
-    # inputs=: gradients for the actor only; the critic's would be thrown away.
-    actor_loss.backward(inputs=list(actor.parameters()))
+    actor_loss.backward(inputs=list(actor.parameters()))  # gradients for the actor only
     actor_opt.step()
 
     soft_update(critic_target, critic, cfg.tau)
@@ -264,8 +250,7 @@ SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,
 
 
 def train(cfg: Config):
-    """Train DDPG with `cfg` (or continue the run cfg.resume). Returns a dict: run_dir, global_step,
-    evaluations, episodes, steps_per_second and interrupted (report.finish_evaluations)."""
+    """Train DDPG with `cfg`, or continue the run cfg.resume; returns report.finish_evaluations()."""
     if cfg.resume:
         cfg = checkpoints.config_to_resume(cfg, SCRIPT)  # the saved run's settings
     # --- seeding and setup ---
@@ -288,7 +273,6 @@ def train(cfg: Config):
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every,
                                shipped=SHIPPED if cfg.env_id == "Walker2d-v5" else None)
     actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
-    # checkpoint.pt: each one's state_dict(), all that decides what comes next (--resume: exact)
     in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
                          rng=checkpoints.RandomState(env, device), log=run)
     first_step = 0
@@ -296,7 +280,6 @@ def train(cfg: Config):
         first_step, obs = checkpoints.resume(run.dir, SCRIPT, cfg, in_checkpoint)
     global_step, losses = first_step, None
 
-    # A first Ctrl-C sets ctrl_c.pressed: the loop ends its step, writes a checkpoint and stops
     with checkpoints.CtrlC() as ctrl_c:
         for global_step in range(first_step + 1, cfg.total_timesteps + 1):
             learning = global_step > cfg.start_steps  # after the random warm-up
@@ -322,8 +305,7 @@ def train(cfg: Config):
                                      critic_opt, buffer.sample(cfg.batch_size), cfg)
             run.progress(global_step, losses, (nets["actor"], nets["critic"]))  # nan/inf: stop
 
-            # --- evaluate: mu(s) without noise, every eval_every steps (tutorial 003); during
-            # the random warm-up only the first time, as the untrained baseline ---
+            # --- evaluate mu(s), no noise, every eval_every steps; in the warm-up once ---
             if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):
                 seen = []  # the evaluation's states and rewards: Q(s, mu(s)) against the return
                 returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
@@ -341,7 +323,6 @@ def train(cfg: Config):
             if ctrl_c.pressed:  # stop where the step is whole (its checkpoint is written)
                 break
     env.close()
-    # model.pt: the actor training ended with; how to go on, or before.gif and after.gif
     return report.finish_evaluations(run, global_step, ctrl_c.pressed, untrained, actor, device,
                                      actor_info, mujoco_env.GIF)
 

@@ -2,22 +2,17 @@
 Applications"): TD3's twin critics with a stochastic actor that is paid for its entropy.
 
 Read after td3_walker.py; `diff td3_walker.py sac_walker.py` shows what SAC changes:
-  1. the actor is a tanh-squashed Gaussian, sampled with reparameterisation (Actor.sample);
-     its log pi(a|s) is corrected for the squash (squashed_log_prob);
+  1. the actor is a tanh-squashed Gaussian, reparameterised (Actor.sample, squashed_log_prob);
   2. the soft TD target: min Q' - alpha log pi at a' ~ pi(.|s'), no target actor (td_target);
   3. the actor maximises min(Q1, Q2) + alpha * entropy, every step (compute_loss_actor);
   4. alpha is learned to hold the entropy near -dim(A) (compute_loss_alpha); --alpha fixes it.
 It explores with its own samples, not with added noise. The loop in train(), top to bottom:
 
     act      random for start_steps steps, then a ~ pi(.|s)
-    store    (s, a, r, s', terminated) in the replay buffer; a time-limit
-             truncation is NOT terminal, so its target still bootstraps
+    store    (s, a, r, s', terminated) in the buffer; a time-limit truncation still bootstraps
     learn    on a random minibatch, one step each of the critics, the actor and alpha;
              then the target critics move a fraction tau toward the critics
     evaluate every eval_every steps (once in the warm-up): 10 episodes of tanh(mean), no sampling
-
-The run folder: evaluations.csv, episodes.csv, model.pt (the last actor), best.pt, best.gif,
-curve.png, inside.png, and checkpoint.pt, from which --resume continues the run exactly.
 
     python sac_walker.py                          # 1M steps: several hours on a CPU
     python sac_walker.py --resume runs/latest      # continue a stopped or killed run exactly
@@ -117,8 +112,7 @@ class Critic(nn.Module):
 
 @dataclass
 class Config(cli.CheckpointFlags):
-    """The algorithm's settings; the flags every script shares (--run-dir, --eval, --threads,
-    --cuda, ...), --checkpoint-every and --resume come from cli.CheckpointFlags."""
+    """The algorithm's settings; the flags all scripts share and --resume: cli.CheckpointFlags."""
     # --- experiment ---
     env_id: str = "Walker2d-v5"
     """gymnasium id of a MuJoCo env (Walker2d-v5, Hopper-v5, HalfCheetah-v5, InvertedPendulum-v5)"""
@@ -127,8 +121,7 @@ class Config(cli.CheckpointFlags):
     total_timesteps: int = 1_000_000
     """env steps to train for (td3_walker.py and ddpg_walker.py: 1M)"""
     start_steps: int = 25_000
-    """uniformly random actions for this many steps before the actor acts and learning
-    starts (the TD3 authors' code: 25k; their paper: 1k on Walker2d; at least batch_size)"""
+    """random actions for this many steps, then the actor acts and learns (>= batch_size)"""
     # --- SAC (Haarnoja et al. 2018b, table 1) ---
     batch_size: int = 256
     """transitions per update (the SAC paper: 256)"""
@@ -173,8 +166,7 @@ class Config(cli.CheckpointFlags):
 
 
 class ReplayBuffer:
-    """A ring of the last `max_size` transitions, a tensor per field, on the training device:
-    a minibatch is one index into each field (no numpy -> torch per batch, no copy to a GPU)."""
+    """A ring of the last `max_size` transitions, one tensor per field, on the training device."""
 
     def __init__(self, obs_dim, act_dim, max_size, device):
         self.obs = torch.zeros(max_size, obs_dim, device=device)       # s   (max_size, obs_dim)
@@ -182,8 +174,7 @@ class ReplayBuffer:
         self.reward = torch.zeros(max_size, device=device)             # r   (max_size,)
         self.next_obs = torch.zeros(max_size, obs_dim, device=device)  # s'  (max_size, obs_dim)
         self.not_done = torch.zeros(max_size, device=device)           # 1 - terminated  (max_size,)
-        # as in tutorial 003: ptr, where the next transition goes; size, how many are stored
-        self.max_size, self.ptr, self.size = max_size, 0, 0
+        self.max_size, self.ptr, self.size = max_size, 0, 0  # ptr: the next slot (tutorial 003)
 
     def add(self, obs, action, reward, next_obs, terminated):
         i = self.ptr
@@ -191,8 +182,7 @@ class ReplayBuffer:
         self.action[i] = torch.as_tensor(action)
         self.reward[i] = float(reward)
         self.next_obs[i] = torch.as_tensor(next_obs)
-        # not_done = 0 only when the episode really ended. A time-limit truncation keeps
-        # not_done = 1: the state was not terminal, so its target bootstraps from s' (td_target).
+        # not_done = 0 only if the episode really ended: a time-limit truncation still bootstraps
         self.not_done[i] = 0.0 if terminated else 1.0
         self.ptr = (self.ptr + 1) % self.max_size  # wrap around: overwrite the oldest
         self.size = min(self.size + 1, self.max_size)
@@ -220,11 +210,10 @@ class ReplayBuffer:
 
 
 def store_and_advance(env, buffer, obs, action, reward, next_obs, terminated, truncated):
-    """Store (s, a, r, s', terminated) and return the obs the next action is chosen in: s', or
-    a new episode's first obs once this one has ended (one env, reset by hand: no autoreset)."""
+    """Store (s, a, r, s', terminated); return s', or a new episode's first obs after the end."""
     buffer.add(obs, action, reward, next_obs, terminated)
     if terminated or truncated:  # the episode is over either way: the next one starts afresh
-        next_obs, _ = env.reset()
+        next_obs, _ = env.reset()  # one env, reset by hand: no autoreset
     return next_obs  # obs = next_obs: the transition is stored; the next action starts here
 
 
@@ -294,8 +283,7 @@ def update_actor_and_targets(nets, obs, target_entropy, cfg):
     actor_loss, logp = compute_loss_actor(nets["actor"], nets["critic"], nets["critic2"], obs,
                                           alpha)
     nets["actor_opt"].zero_grad()
-    # inputs=: gradients for the actor only; the critics' would be thrown away.
-    actor_loss.backward(inputs=list(nets["actor"].parameters()))
+    actor_loss.backward(inputs=list(nets["actor"].parameters()))  # gradients for the actor only
     nets["actor_opt"].step()
 
     if cfg.alpha is None:  # learned: descend J(alpha); fixed (--alpha): alpha stays
@@ -342,8 +330,7 @@ SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,
 
 
 def train(cfg: Config):
-    """Train SAC with `cfg` (or continue the run cfg.resume). Returns a dict: run_dir, global_step,
-    evaluations, episodes, steps_per_second and interrupted (report.finish_evaluations)."""
+    """Train SAC with `cfg`, or continue the run cfg.resume; returns report.finish_evaluations()."""
     if cfg.resume:
         cfg = checkpoints.config_to_resume(cfg, SCRIPT)  # the saved run's settings
     # --- seeding and setup ---
@@ -363,7 +350,6 @@ def train(cfg: Config):
     obs, _ = env.reset(seed=cfg.seed)
     run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, cfg.start_steps, cfg.eval_every)
     actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
-    # checkpoint.pt: each one's state_dict(), all that decides what comes next (--resume: exact)
     in_checkpoint = dict(nets, buffer=buffer, env=mujoco_env.MujocoEnvState(env),
                          rng=checkpoints.RandomState(env, device), log=run)
     first_step = 0
@@ -372,7 +358,6 @@ def train(cfg: Config):
     global_step, losses = first_step, None
     entropy = torch.tensor(float("nan"))  # -log pi at the last update: evaluations.csv
 
-    # A first Ctrl-C sets ctrl_c.pressed: the loop ends its step, writes a checkpoint and stops
     with checkpoints.CtrlC() as ctrl_c:
         for global_step in range(first_step + 1, cfg.total_timesteps + 1):
             learning = global_step > cfg.start_steps  # after the random warm-up
@@ -421,7 +406,6 @@ def train(cfg: Config):
             if ctrl_c.pressed:  # stop where the step is whole (its checkpoint is written)
                 break
     env.close()
-    # model.pt: the actor training ended with; how to go on, or before.gif and after.gif
     return report.finish_evaluations(run, global_step, ctrl_c.pressed, untrained, actor, device,
                                      actor_info, mujoco_env.GIF)
 
