@@ -1,11 +1,5 @@
 """Unit tests of common.py: returns and GAE against brute-force sums, evaluation, GIFs, envs."""
 
-import dataclasses
-import re
-import subprocess
-import sys
-import textwrap
-
 import imageio.v3 as iio
 import numpy as np
 import pytest

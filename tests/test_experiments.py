@@ -153,8 +153,6 @@ def test_measured_update_is_the_update_plus_three_numbers_it_only_reads(script):
     same state and seed, plus kl_after and the ratio's range, computed here by brute force."""
     import importlib
 
-    from torch.distributions import Categorical
-
     module = importlib.import_module(script)
     cfg = module.Config()
     results = []

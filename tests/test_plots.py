@@ -202,7 +202,6 @@ def brute_force_value(angle, velocity, gamma, scale):
 def test_true_value_map_is_the_brute_force_rollout_at_each_state():
     """cartpole_env.cartpole_true_values against a hand-written rollout in the single env, at
     the grid's corners (one step from failure) and its centre (balanced to the horizon)."""
-    import report
 
     true = cartpole_env.cartpole_true_values(Lean(), "cpu", 0.99, 0.05, seed=0, n=3, rollouts=2)
     assert true["angle"].tolist() == [-0.21, 0.0, 0.21]

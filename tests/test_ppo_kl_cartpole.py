@@ -2,7 +2,7 @@
 
 import pytest
 import torch
-from torch.distributions import Categorical, kl_divergence
+from torch.distributions import Categorical
 
 import ppo_kl_cartpole as kl
 

@@ -13,7 +13,7 @@ import imageio.v3 as iio
 import pytest
 import torch
 
-from conftest import ROOT, interrupt, run_main, run_script
+from conftest import interrupt, run_main, run_script
 
 CARTPOLE = ["ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole"]
 QUICK = ["--total-timesteps", 512, "--no-stop-when-solved", "--eval-episodes", 1,

@@ -16,7 +16,6 @@ import torch
 import checkpoints
 import cli
 import common
-import report
 import runlog
 import cartpole_env
 from common import UserError
