@@ -327,6 +327,7 @@ def train(cfg: Config):
     policy = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     result, nets = dict(run_dir=run.dir, held={}, rm_accuracy=None), dict(policy=policy)
+    r_w = r_l = r_sft = torch.zeros(0)  # r on held-out pairs (inside.png), once r exists
 
     with run.saving_model(nets):  # Ctrl-C ends training; model.pt is saved as training left it
         # --- 1. supervised phase: imitate the labels, wrong ones included ---
@@ -406,10 +407,10 @@ def train(cfg: Config):
                 w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
                         for y in (test_w, test_l))
             print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
+    report.draw_logged(run, pictures(r_w - r_sft.mean(), r_l - r_sft.mean()))  # Ctrl-C too
     if run.interrupted:
-        print(f"interrupted: {run.dir} holds model.pt as training left it", flush=True)
-    else:
-        report.draw_logged(run, pictures(r_w - r_sft.mean(), r_l - r_sft.mean()))
+        print(f"interrupted: {run.dir} holds model.pt as training left it, curve.png and "
+              "inside.png of what was logged", flush=True)
     return dict(result, interrupted=run.interrupted)
 
 

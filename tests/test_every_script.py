@@ -126,7 +126,8 @@ def test_ctrl_c_is_one_line_exit_130_and_keeps_its_files(script, tmp_path):
     (run,) = tmp_path.iterdir()
     names = {p.name for p in run.iterdir()}
     assert "model.pt" in names and not any(".tmp" in n for n in names), names
-    if "progress.csv" in names:  # a row per update: the one the progress line showed is kept
-        assert len((run / "progress.csv").read_text().splitlines()) >= 2
+    if "progress.csv" in names:  # a row per update: the one the progress line showed is kept,
+        assert len((run / "progress.csv").read_text().splitlines()) >= 2  # and drawn
+        assert {"curve.png", "inside.png"} <= names, names
     last = out.strip().splitlines()[-1]
     assert last.startswith("interrupted") and str(run) in last, out  # says where its files are
