@@ -163,8 +163,8 @@ class Config(cli.OutputFlags):
                          learning_rate="> 0", clip_coef="> 0", eval_prompts="> 0", eval_every="> 0",
                          label_noise="[0, 1]", more_labels_steps=">= 0")
         cli.check(not (self.rft and self.more_labels), "--rft, --more-labels: pass one, not both")
-        cli.check(not (self.gif or self.watch or self.cuda), "--gif and --watch play an env, and "
-                  "this task has none (--eval prints the answers); --cuda: no GPU code here")
+        cli.check(not (self.gif or self.watch or self.cuda), "--gif, --watch, --cuda: no env to "
+                  "play (--eval prints the answers), no GPU code here")
         cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
                   f"multiple of --n-head ({self.n_head})")
 

@@ -126,6 +126,8 @@ class Config(cli.OutputFlags):
     """PPO and DPO steps between two held-out checks (the supervised phase: 20 times it)"""
     eval: str | None = None
     """a saved run's model.pt or folder: print its PPO and DPO models' held-out answers, scores"""
+    eval_seed: int = 10_000
+    """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
     def __post_init__(self):
         cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
@@ -292,7 +294,7 @@ def ppo_update(policy, value_net, opt, data, cfg, gen):
                 cfg.num_minibatches):
             mb = dict({k: x[mb_inds] for k, x in data.items() if k != "P"}, P=data["P"])
             loss_pi, loss_v, clipfrac = ppo_token_loss(policy, value_net, mb, cfg.clip_coef)
-            loss = loss_pi + cfg.vf_coef * loss_v  # L_CLIP - c1 L_VF, minimized (eq. 9)
+            loss = loss_pi + cfg.vf_coef * loss_v  # -(L_CLIP - c1 L_VF), minimized (eq. 9)
             opt.zero_grad()
             loss.backward()
             opt.step()

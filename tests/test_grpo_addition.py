@@ -287,7 +287,7 @@ def test_help_leaves_out_the_shared_flags_that_play_an_env(capsys):
         grpo.cli.parse_config(grpo.Config, ["--watch"])
     err = capsys.readouterr().err
     assert stop.value.code == 2 and len(err.strip().splitlines()) == 1, err
-    assert "this task has none" in err and "--gif OUT.gif" not in err, err
+    assert "no env to play" in err and "--gif OUT.gif" not in err, err
 
 
 def test_ctrl_c_keeps_the_model(tmp_path):
