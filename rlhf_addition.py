@@ -37,7 +37,7 @@ from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
                            sample, sft_loss, split_pairs, token_logp)
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
-LOGGED = dict(phase=(None, "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
+LOGGED = dict(phase=("s", "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
               rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
               kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
               clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
