@@ -31,10 +31,10 @@ class OutputFlags:
     """What a run writes and shows, and playback: the flags every script shares."""
 
     run_dir: str = "runs"
-    """parent folder of the run folder <script>__<env>__seed<k>__<time>/ (runs/latest: this
-    script's newest one, for --eval and --resume)"""
+    """parent folder of the run folder <script>__<env or task>__seed<k>__<time>/ (runs/latest:
+    this script's newest one, for --eval, and for --resume where the script has it)"""
     print_every: int = 10
-    """print a progress line every this many updates"""
+    """print a progress line every this many updates (rows of progress.csv)"""
     gifs: bool = True
     """write before.gif (untrained) and after.gif (trained) to the run folder, one episode each,
     acting as the script's first evaluation does (PPO and A2C: actions drawn from pi, as in
@@ -46,8 +46,7 @@ class OutputFlags:
     """also write the logs as TensorBoard scalars into the run folder, with CleanRL's tag
     names (needs `pip install tensorboard`; then: tensorboard --logdir runs)"""
     eval_episodes: int = 10
-    """episodes of each evaluation (the periodic ones, the solved rule's checks, the last one,
-    --eval)"""
+    """episodes of each evaluation (--eval too)"""
     eval_seed: int = 10_000
     """seed of the evaluation env (and of its action draws, for a policy that samples), kept
     apart from the training seed"""
