@@ -101,7 +101,7 @@ class Config(cli.SolvedFlags):
     """minibatch steps in each learning phase (Mnih et al.: 1)"""
     target_update_interval: int = 64
     """gradient steps between copies of the network into the target (Mnih et al.: 10000); each
-    copy lets Q look a step further: twice a phase builds Q fast; every 32, Q diverged"""
+    copy lets the targets look one step further (docs/experiments.md: every 32, Q diverged)"""
     eps_start: float = 1.0
     """epsilon of epsilon-greedy at step 0"""
     eps_end: float = 0.01

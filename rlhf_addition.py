@@ -91,7 +91,7 @@ class Config(cli.OutputFlags):
     rm_lr: float = 1e-3
     """Adam step size of the reward model"""
     reward_from: str = "model"
-    """model: PPO's reward is the reward model's r (RLHF); judge: the hidden score on r's scale"""
+    """model: PPO is paid the reward model's r (RLHF); judge: the hidden score, scaled as r"""
     ppo_steps: int = 50
     """PPO updates, each on a fresh batch of prompts"""
     ppo_prompts: int = 256
@@ -105,7 +105,7 @@ class Config(cli.OutputFlags):
     clip_coef: float = 0.2
     """epsilon of the per-token clipped ratio, as in PPO-clip"""
     vf_coef: float = 0.5
-    """value loss weight c1 (PPO eq. 9); inert here: no shared weights, no gradient clip, Adam"""
+    """value loss weight c1 (PPO eq. 9); no effect here: V is a network of its own, Adam rescales"""
     beta: float = 0.1
     """weight of the per-token KL penalty to pi_ref (0: none), relative to r's scale (printed)"""
     gamma: float = 1.0
