@@ -329,7 +329,7 @@ def train(cfg: Config):
     policy = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
     result, nets = dict(run_dir=run.dir, held={}, rm_accuracy=None), dict(policy=policy)
-    r_w = r_l = r_sft = torch.zeros(0)  # r on held-out pairs (inside.png), once r exists
+    r_w = r_l = torch.zeros(0)  # r on held-out pairs (inside.png), once r exists
 
     with run.saving_model(nets):  # Ctrl-C ends training; model.pt is saved as training left it
         # --- 1. supervised phase: imitate the labels, wrong ones included ---
@@ -409,21 +409,22 @@ def train(cfg: Config):
                 w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
                         for y in (test_w, test_l))
             print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
-    report.draw_logged(run, pictures(r_w - r_sft.mean(), r_l - r_sft.mean()))  # Ctrl-C too
+    report.draw_logged(run, pictures(r_w - r_l))  # also after a Ctrl-C
     if run.interrupted:
         print(f"interrupted: {run.dir} holds model.pt as training left it, curve.png and "
               "inside.png of what was logged", flush=True)
     return dict(result, interrupted=run.interrupted)
 
 
-def pictures(r_w, r_l):
-    """curve.png: each stage over its steps; inside.png: r on held-out pairs, PPO's over KL."""
+def pictures(margins):
+    """curve.png: each stage over its steps; inside.png: r's margins on held-out pairs (r is
+    known up to a shift per prompt: only r(x, y_w) - r(x, y_l) means something), PPO's over KL."""
     numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
     stages = [plots.lines(*numbers, title=name, where=("phase", name), xlabel="step")
               for name in ("sft", "rm", "ppo", "dpo")]
     return dict(curve=[stages[:2], stages[2:]], inside=[[
-        plots.distributions({"chosen (higher true score)": r_w.numpy(), "rejected": r_l.numpy()},
-                            "reward model on held-out pairs", "r(x, y)"),
+        plots.distributions({"r(x, y_w) - r(x, y_l)": margins.numpy()}, "reward model on "
+                            "held-out pairs: right of 0, ranked right", "margin"),
         plots.lines("rm_score", "true_score", where=("phase", "ppo"), x="kl",
                     x_of=lambda kl: np.sqrt(np.maximum(kl, 0)),
                     title="PPO's answers against their KL to the supervised model",
