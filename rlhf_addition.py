@@ -33,8 +33,8 @@ import common
 import plots
 import report
 import runlog
-from grpo_addition import (TinyGPT, completion_mask, decode, encode, prompt_of,
-                           sample, sft_loss, split_pairs, token_logp)
+from grpo_addition import (TinyGPT, completion_mask, decode, encode, lengths, prompt_of,
+                           sample, split_pairs, supervised_step, token_logp)
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
 LOGGED = dict(phase=("s", "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
@@ -169,7 +169,7 @@ def prompt_ids(pairs, digits):
 
 def scores_of(seqs, digits):
     """true_score of each row of `seqs` (prompt + answer ids), (B,)."""
-    P = 2 * digits + 2
+    P = lengths(digits)[0]
     return torch.tensor([true_score(*map(int, decode(s[:P - 1]).split("+")), decode(s[P:]),
                                     digits) for s in seqs.tolist()])
 
@@ -267,7 +267,8 @@ def evaluate(model, pairs, cfg, n=None):
     """Held-out true score (the judge's mean) and accuracy (the share of right answers) of K
     answers a prompt (as grpo_addition.py samples G), drawn with a generator of their own."""
     prompts = prompt_ids(pairs[:n], cfg.digits).repeat_interleave(cfg.answers_per_prompt, 0)
-    seqs = sample(model, prompts, cfg.digits + 2, torch.Generator().manual_seed(cfg.eval_seed))
+    gen = torch.Generator().manual_seed(cfg.eval_seed)
+    seqs = sample(model, prompts, lengths(cfg.digits)[1], gen)
     scores = scores_of(seqs, cfg.digits)
     return scores.mean().item(), (scores == 1).float().mean().item()
 
@@ -324,7 +325,7 @@ def train(cfg: Config):
     torch.set_num_threads(cfg.threads)  # also for reproducibility: threads change float sums
     rng, gen = np.random.default_rng(cfg.seed), torch.Generator().manual_seed(cfg.seed)
     train_pairs, held_out = split_pairs(cfg.digits, cfg.eval_prompts, rng)
-    P, L, K = 2 * cfg.digits + 2, cfg.digits + 2, cfg.answers_per_prompt  # prompt, answer lengths
+    (P, L), K = lengths(cfg.digits), cfg.answers_per_prompt  # prompt, answer lengths in tokens
     prompts_of = lambda picks: prompt_ids([train_pairs[i] for i in picks], cfg.digits)  # noqa
     policy = TinyGPT(cfg.n_layer, cfg.d_model, cfg.n_head, P + L)
     run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=f"addition{cfg.digits}")
@@ -335,10 +336,7 @@ def train(cfg: Config):
         # --- 1. supervised phase: imitate the labels, wrong ones included ---
         opt, start = torch.optim.Adam(policy.parameters(), lr=cfg.sft_lr), time.time()
         for step in range(1, cfg.sft_steps + 1):
-            loss = sft_loss(policy, supervised_batch(train_pairs, cfg, rng), P)
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
+            loss = supervised_step(policy, opt, supervised_batch(train_pairs, cfg, rng), P)
             log_row(run, held_out, cfg, "sft", loss=loss.item(),
                     check=policy if step % (20 * cfg.eval_every) == 0 else None)
         reference = copy.deepcopy(policy).requires_grad_(False)  # pi_ref: the KL's anchor
@@ -444,9 +442,9 @@ def main(argv=None):
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
         for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
-                c.n_layer, c.d_model, c.n_head, 3 * c.digits + 4))  # prompt + answer
+                c.n_layer, c.d_model, c.n_head, sum(lengths(c.digits))))  # prompt + answer
             seqs = sample(model, prompt_ids(held_out[:6], c.digits).repeat_interleave(6, 0),
-                          c.digits + 2, torch.Generator().manual_seed(c.eval_seed))
+                          lengths(c.digits)[1], torch.Generator().manual_seed(c.eval_seed))
             for row in seqs.view(6, 6, -1):  # 6 answers to each of 6 sums, the same draws
                 print(key, " ".join(f"{decode(s)}({v:.2f})"
                                     for s, v in zip(row.tolist(), scores_of(row, c.digits))))
