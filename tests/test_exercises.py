@@ -934,18 +934,18 @@ def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monk
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target"])
+@pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target", "td3_target"])
 def test_the_scripts_own_functions_learn(name):
     """Stage (c) with the scripts' own functions: one exercise per script (the others of the
-    same script run the very same training). These are the CartPole scripts' and DDPG's
-    learning tests, seed 0; DQN's, TD3's and SAC's are in their scripts' tests."""
+    same script run the very same training). These are the CartPole scripts', DDPG's and
+    TD3's learning tests, seed 0; DQN's and SAC's are in their scripts' tests."""
     ex = check.EXERCISES[name]
     result = check.learns(ex, getattr(ex.owner(), ex.function))  # raises check.Failed if not
     if "eval_returns" in result:  # CartPole: solved (learns checks it), from short episodes,
         assert np.mean(result["episode_returns"][:20]) < 100  # and pi holds the pole when tested
         assert np.mean(result["eval_returns"]) >= 450
-    if ex.script in ("ddpg_walker", "sac_walker"):  # from falling to balancing all 1000
-        assert result["evaluations"][0]["eval_mean"] < 200  # (seeds 0-4 reach 1000: docs/experiments.md)
+    if ex.script in ("ddpg_walker", "td3_walker", "sac_walker"):  # from falling to balancing
+        assert result["evaluations"][0]["eval_mean"] < 200  # (DDPG's seeds 0-4: experiments.md)
         assert [e["eval_mean"] for e in result["evaluations"][-check.HOLD:]] == [1000] * check.HOLD
 
 

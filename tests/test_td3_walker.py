@@ -3,7 +3,6 @@ exact resume after Ctrl-C, clear errors, and learning on a cheap task. (What the
 stores and what each update is fed: tests/test_replay_loops.py.)"""
 
 import difflib
-import sys
 
 import numpy as np
 import pytest
@@ -103,17 +102,8 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, needle, capsys):
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.slow
-def test_learns_inverted_pendulum_with_a_fixed_seed():
-    """From falling to balancing the pole to the end (the last evaluations at 1000, the
-    maximum): the td3_target exercise's stage (c) with the script's own update, the very run a
-    learner's right answer must repeat (exercises/check.py: TD3_LEARN)."""
-    sys.path.insert(0, str(ROOT / "exercises"))
-    import check
-    ex = check.EXERCISES["td3_target"]
-    evaluations = check.learns(ex, getattr(ex.owner(), ex.function))["evaluations"]
-    assert evaluations[0]["eval_mean"] < 200  # the pole falls
-    assert [e["eval_mean"] for e in evaluations[-check.HOLD:]] == [1000] * check.HOLD
+# TD3's learning run on InvertedPendulum (seed 0, 30,000 steps) is in tests/test_exercises.py:
+# stage (c) of the td3_target exercise, with the script's own update.
 
 
 def test_help_shows_the_three_fixes(capsys):
