@@ -45,8 +45,6 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
-
-
 def layer_init(layer, gain=np.sqrt(2)):
     """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
     nn.init.orthogonal_(layer.weight, gain)
@@ -75,8 +73,6 @@ class ActorCritic(nn.Module):
 
 
 # ==== Hyperparameters: each once, here; --help shows the string under each =============
-
-
 @dataclass
 class Config(cli.SolvedFlags):
     """The algorithm's settings; the shared flags (--run-dir, --eval, ...): cli.SolvedFlags."""
@@ -130,8 +126,6 @@ class Config(cli.SolvedFlags):
 
 
 # ==== Rollout buffer and loss =============================================================
-
-
 class RolloutBuffer:
     """num_steps x num_envs transitions as (T, N, ...) numpy arrays, as the envs give them;
     get_batch turns the whole rollout into tensors once, not at every step."""
@@ -218,8 +212,6 @@ def pictures(cfg):
 
 
 # ==== Training ============================================================================
-
-
 def train(cfg: Config):
     """Train A2C with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
     episode_returns, eval_returns, greedy_returns, interrupted (report.finish_updates)."""

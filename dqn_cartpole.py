@@ -54,8 +54,6 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
-
-
 class QNetwork(nn.Module):
     """Q(s, .): observation -> one value per action (rl-zoo's CartPole net: 256, 256)."""
 
@@ -72,8 +70,6 @@ class QNetwork(nn.Module):
 
 
 # ==== Hyperparameters: each once, here; --help shows the string under each =============
-
-
 @dataclass
 class Config(cli.SolvedFlags):
     """The algorithm's settings (rl-zoo's CartPole-v1 DQN unless said); shared: cli.SolvedFlags."""
@@ -133,8 +129,6 @@ class Config(cli.SolvedFlags):
 
 
 # ==== Replay buffer, target, loss, update =================================================
-
-
 class ReplayBuffer:
     """A ring of the last `max_size` transitions, a tensor per field, on the training device
     (as ddpg_walker.py's; the action is an index here)."""
@@ -249,8 +243,6 @@ def pictures(cfg):
 
 
 # ==== Training ============================================================================
-
-
 def train(cfg: Config):
     """Train DQN (Double DQN with cfg.double). Returns report.finish_updates's dict: run_dir,
     solved, solved_step, global_step, episode_returns, greedy_returns, interrupted."""

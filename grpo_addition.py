@@ -60,8 +60,6 @@ def decode(ids):
 
 
 # ==== The model: a tiny GPT ===============================================================
-
-
 class Block(nn.Module):
     """Pre-norm transformer block: causal self-attention, then an MLP, each a residual."""
 
@@ -95,8 +93,6 @@ class TinyGPT(nn.Module):
 
 
 # ==== Hyperparameters =====================================================================
-
-
 @dataclass
 class Config(cli.OutputFlags):
     """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
@@ -170,8 +166,6 @@ class Config(cli.OutputFlags):
 
 
 # ==== The task: prompts, answers, the verifier ============================================
-
-
 def prompt_of(a, b, digits):
     return f"{a:0{digits}d}+{b:0{digits}d}="
 
@@ -204,8 +198,6 @@ def split_pairs(digits, eval_prompts, rng):
 
 
 # ==== Sampling and the losses =============================================================
-
-
 @torch.no_grad()
 def sample(model, prompts, n_new, generator):
     """Complete each prompt (B, P) with n_new tokens drawn from pi; returns (B, P + n_new)."""
@@ -347,8 +339,6 @@ def saved_start(cfg):
 
 
 # ==== Training ============================================================================
-
-
 def rft_steps(model, opt, seqs, rewards, logp_old, logp_ref, mask, cfg):
     """--rft, the baseline: on GRPO's own samples, update_epochs supervised steps on the
     answers the verifier accepts (none accepted: no step, no loss). The KL to pi_ref (k3) is

@@ -40,8 +40,6 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
-
-
 def layer_init(layer, gain=np.sqrt(2)):
     """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
     nn.init.orthogonal_(layer.weight, gain)
@@ -81,8 +79,6 @@ class ValueNetwork(nn.Module):
 
 
 # ==== Hyperparameters: each once, here; --help shows the string under each =============
-
-
 @dataclass
 class Config(cli.SolvedFlags):
     """The algorithm's settings; the flags every script shares (--run-dir, --gifs, --eval,
@@ -151,8 +147,6 @@ class Config(cli.SolvedFlags):
 
 
 # ==== Rollout buffer, losses, update ======================================================
-
-
 class RolloutBuffer:
     """num_steps x num_envs transitions as (T, N, ...) numpy arrays, as the envs give them;
     get_batch turns the whole rollout into tensors once, not at every step."""
@@ -290,8 +284,6 @@ def pictures(cfg):
 
 
 # ==== Training ============================================================================
-
-
 def train(cfg: Config):
     """Train PPO-clip with `cfg`. Returns a dict: run_dir, solved, solved_step, global_step,
     episode_returns, eval_returns, greedy_returns, interrupted (report.finish_updates)."""

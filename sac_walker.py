@@ -49,8 +49,6 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
-
-
 class Actor(nn.Module):
     """pi(a|s): a Gaussian over u, squashed into the action box: a = bias + scale * tanh(u)."""
 
@@ -108,8 +106,6 @@ class Critic(nn.Module):
 
 
 # ==== Hyperparameters: each once, here; --help shows the string under each =============
-
-
 @dataclass
 class Config(cli.CheckpointFlags):
     """The algorithm's settings; the flags all scripts share and --resume: cli.CheckpointFlags."""
@@ -163,8 +159,6 @@ class Config(cli.CheckpointFlags):
 
 
 # ==== Replay buffer and update ============================================================
-
-
 class ReplayBuffer:
     """A ring of the last `max_size` transitions, one tensor per field, on the training device."""
 
@@ -327,8 +321,6 @@ SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,
 
 
 # ==== Training ============================================================================
-
-
 def train(cfg: Config):
     """Train SAC with `cfg`, or continue the run cfg.resume; returns report.finish_evaluations()."""
     if cfg.resume:

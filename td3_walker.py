@@ -47,8 +47,6 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
-
-
 class Actor(nn.Module):
     """mu(s): observation -> action, squashed by tanh into the action box."""
 
@@ -83,8 +81,6 @@ class Critic(nn.Module):
 
 
 # ==== Hyperparameters: each once, here; --help shows the string under each =============
-
-
 @dataclass
 class Config(cli.CheckpointFlags):
     """The algorithm's settings; the flags all scripts share and --resume: cli.CheckpointFlags."""
@@ -141,8 +137,6 @@ class Config(cli.CheckpointFlags):
 
 
 # ==== Replay buffer and update ============================================================
-
-
 class ReplayBuffer:
     """A ring of the last `max_size` transitions, one tensor per field, on the training device."""
 
@@ -277,8 +271,6 @@ SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,
              eval_every=150, eval_episodes=1, batch_size=64, hidden=64)  # seconds, every file
 
 # ==== Training ============================================================================
-
-
 def train(cfg: Config):
     """Train TD3 with `cfg`, or continue the run cfg.resume; returns report.finish_evaluations()."""
     if cfg.resume:
