@@ -248,8 +248,10 @@ def clear_exit():
     error, one line and exit 130."""
     try:
         yield
-    except UserError as e:
-        print(f"error: {e}", file=sys.stderr, flush=True)
+    except UserError as e:  # named as argparse names its errors: "ppo_cartpole.py: error: ..."
+        prog = Path(sys.argv[0]).name
+        print(f"{prog + ': ' if prog.endswith('.py') else ''}error: {e}", file=sys.stderr,
+              flush=True)
         sys.exit(2)
     except (KeyboardInterrupt, ImportError, RuntimeError, MemoryError, gym.error.Error) as e:
         if from_ctrl_c(e):

@@ -161,6 +161,8 @@ def test_interrupted_run_draws_its_curve_and_says_where_it_is(script, tmp_path):
     ("actor_critic_cartpole", ["--gamma=-inf"], "--gamma must be a finite number"),
     ("ddpg_walker", ["--gamma", "nan"], "--gamma must be a finite number"),
     ("ddpg_walker", ["--eval", "a.pt", "--resume", "b"], "--resume"),
+    # found only once training or --eval starts, and named as argparse names its errors
+    ("ppo_cartpole", ["--eval", "nowhere"], "ppo_cartpole.py: error: no checkpoint at nowhere"),
 ])
 def test_bad_flags_are_one_line_and_exit_2(script, args, needle, tmp_path, capsys):
     p = run_main(f"{script}.py", *args, "--run-dir", tmp_path, capsys=capsys)
