@@ -79,7 +79,7 @@ class Config(cli.SolvedFlags):
     seed: int = 0
     """seeds torch, numpy's draws and the env: same seed, same machine => same progress.csv"""
     total_timesteps: int = 100_000
-    """budget of env steps (rl-zoo: 50000); training stops when solved"""
+    """budget of env steps (rl-zoo, SB3's tuned settings: 50000); training stops when solved"""
     start_steps: int = 1000
     """steps of random actions that fill the buffer before learning (>= batch_size; rl-zoo: 1000)"""
     # --- DQN ---
