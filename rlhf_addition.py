@@ -218,7 +218,7 @@ def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
 
 def per_token_rewards(score, logp_old, logp_ref, mask, beta):
     """R(x, y) = r(x, y) - beta log(pi(y|x) / pi_ref(y|x))  (Ziegler et al. 2019, eq. 2;
-    Stiennon et al. 2020, eq. 1), spread over the tokens. Returns (rewards, kl), (B, L), 0 after
+    Stiennon et al. 2020, sec. 3.4), spread over the tokens. Returns (rewards, kl), (B, L), 0 after
     the end. E.g. beta 0.1, log ratios 0.5 then 0, score 2: rewards -0.05, 2."""
     kl = (logp_old - logp_ref) * mask  # log pi_old / pi_ref of each sampled token (k1)
     rewards = -beta * kl
