@@ -171,9 +171,10 @@ def finish_evaluations(run, global_step, interrupted, untrained, actor, device, 
                  if path.exists() else None)
         where = (f"its checkpoint is at step {saved}: continue with `python {run.script}.py "
                  f"--resume {run.dir}`" if saved else "no checkpoint was written yet")
+        best = ("; best.gif shows its best evaluation so far" if (run.dir / "best.gif").exists()
+                else "")  # not before an evaluation has drawn it
         print(f"interrupted at step {global_step}; model.pt holds the actor of that step; "
-              f"{where} (before.gif and after.gif come when a run finishes; best.gif shows "
-              f"its best evaluation so far)", flush=True)
+              f"{where} (before.gif and after.gif come when a run finishes{best})", flush=True)
         return result
     print(f"learning phase: {learned} steps at {rate:.1f} steps/s (updates and evaluations "
           f"included); model: {run.dir / 'model.pt'} (step {global_step}); run folder: "

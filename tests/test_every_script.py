@@ -8,6 +8,7 @@ A new script is one new file: if it crashes while drawing, forgets to declare SM
 column, or leaves a *.tmp behind, these tests fail in the quick layer (pytest -m quick).
 """
 
+import re
 import dataclasses
 import importlib
 
@@ -131,3 +132,6 @@ def test_ctrl_c_is_one_line_exit_130_and_keeps_its_files(script, tmp_path):
         assert {"curve.png", "inside.png"} <= names, names
     last = out.strip().splitlines()[-1]
     assert last.startswith("interrupted") and str(run) in last, out  # says where its files are
+    promised = "before.gif and after.gif come when a run finishes"  # the walkers' line
+    named = re.findall(r"\w+\.(?:gif|png|pt|csv)\b", last.replace(promised, ""))
+    assert set(named) <= names, (named, names)  # it names no file that is not there
