@@ -248,7 +248,7 @@ def clear_exit():
     error, one line and exit 130."""
     try:
         yield
-    except UserError as e:  # named as argparse names its errors: "ppo_cartpole.py: error: ..."
+    except UserError as e:  # named as argparse names its errors: "<script>.py: error: ..."
         prog = Path(sys.argv[0]).name
         print(f"{prog + ': ' if prog.endswith('.py') else ''}error: {e}", file=sys.stderr,
               flush=True)
