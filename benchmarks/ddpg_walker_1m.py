@@ -10,6 +10,8 @@ benchmarks/results/<script>_1m/seed<k>/ as it grows.
     python benchmarks/ddpg_walker_1m.py plot               # docs/ddpg_walker_1m.png, from the copies
     python benchmarks/ddpg_walker_1m.py start ~/td3-1m --script td3_walker --seeds 0 1
     python benchmarks/ddpg_walker_1m.py plot --script td3_walker   # TD3's runs beside DDPG's
+    python benchmarks/ddpg_walker_1m.py at 300000          # DDPG, TD3 and SAC at equal steps
+    python benchmarks/ddpg_walker_1m.py plot --script sac_walker   # the three, to SAC's last step
 
 The measure (as in the TD3 paper's ablation table): per seed, the mean of the last 10
 evaluations (each the mean return of 10 episodes without exploration noise); over the seeds,
@@ -159,12 +161,47 @@ def summary(finals, what="at 1M"):
             f"standard error {sd / len(finals) ** 0.5:.0f}")
 
 
+NAMES = {"ddpg_walker": "DDPG", "td3_walker": "TD3", "sac_walker": "SAC"}
+
+
+def at_equal_steps(at):
+    """docs/results.md's SAC table: each script's committed records at `at` env steps, side by
+    side. Per seed: the mean of the last 10 evaluations up to `at`, and the highest evaluation
+    up to `at`; over the seeds that have reached `at`: their mean and its standard error."""
+    k = f"{at // 1000}k"
+    print(f"| algorithm | seeds | last 10 up to {k}, each seed | their mean (se) | "
+          f"highest up to {k}, each seed | their mean (se) |")
+    print("|---|---|---|---|---|---|")
+    for script, name in NAMES.items():
+        seeds, lasts, highs = [], [], []
+        for seed in SEEDS:
+            rows = read(record(seed, script)) if record(seed, script).exists() else []
+            if rows and rows[-1][0] >= at:
+                seeds.append(seed)
+                lasts.append(last10(rows, at))
+                highs.append(max(m for step, m in rows if step <= at))
+        print(f"| {name} | {', '.join(map(str, seeds))} | {', '.join(f'{x:.0f}' for x in lasts)} | "
+              f"{mean_se(lasts)} | {', '.join(f'{x:.0f}' for x in highs)} | {mean_se(highs)} |")
+
+
+def mean_se(values):
+    if len(values) < 2:
+        return "-"
+    mean = sum(values) / len(values)
+    sd = (sum((x - mean) ** 2 for x in values) / (len(values) - 1)) ** 0.5
+    return f"{mean:.0f} ({sd / len(values) ** 0.5:.0f})"
+
+
 def plot():
     """docs/<script>_1m.png from the committed records, drawn as plots.py draws run folders:
     each seed a thin line, the mean where every seed has a value thick; TD3's beside DDPG's."""
     sys.path.insert(0, str(ROOT))
     import plots
-    scripts = ["ddpg_walker"] + (["td3_walker"] if SCRIPT == "td3_walker" else [])
+    scripts = {"ddpg_walker": ["ddpg_walker"], "td3_walker": ["ddpg_walker", "td3_walker"],
+               "sac_walker": list(NAMES)}[SCRIPT]
+    # SAC's picture ends where SAC's furthest run is: the three at equal steps
+    upto = (max(read(record(s, SCRIPT))[-1][0] for s in SEEDS if record(s, SCRIPT).exists())
+            if SCRIPT == "sac_walker" else BUDGET)
     with tempfile.TemporaryDirectory() as tmp:
         runs = []
         for script in scripts:
@@ -173,7 +210,9 @@ def plot():
                 if path.exists():  # in a folder named as run folders are: plots.py knows its script
                     run = Path(tmp) / f"{script}__Walker2d-v5__seed{seed}__record"
                     run.mkdir()
-                    shutil.copy(path, run)
+                    head, *rows = path.read_text().splitlines(keepends=True)
+                    (run / "evaluations.csv").write_text(head + "".join(
+                        row for row in rows if int(row.split(",")[0]) <= upto))
                     runs.append(run)
         print(f"wrote {plots.compare(runs, ROOT / 'docs' / f'{SCRIPT}_1m.png')}")
 
@@ -181,17 +220,19 @@ def plot():
 def main():
     global SCRIPT
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("action", choices=("start", "status", "table", "plot"))
-    parser.add_argument("parent", nargs="?", type=Path, help="folder of the five run folders")
+    parser.add_argument("action", choices=("start", "status", "table", "plot", "at"))
+    parser.add_argument("parent", nargs="?", help="folder of the five run folders (at: the step)")
     parser.add_argument("--script", default=SCRIPT, choices=("ddpg_walker", "td3_walker", "sac_walker"))
     parser.add_argument("--seeds", type=int, nargs="+", default=SEEDS,
                         help="start: only these seeds (the others wait for a later start)")
     args = parser.parse_args()
     SCRIPT = args.script
-    if args.action in ("start", "status") and args.parent is None:
-        parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m")
-    {"start": lambda: start(args.parent, args.seeds), "status": lambda: status(args.parent),
-     "table": table, "plot": plot}[args.action]()
+    if args.action in ("start", "status", "at") and args.parent is None:
+        parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m"
+                     if args.action != "at" else "at needs a step, e.g. at 300000")
+    {"start": lambda: start(Path(args.parent), args.seeds),
+     "status": lambda: status(Path(args.parent)), "table": table, "plot": plot,
+     "at": lambda: at_equal_steps(int(args.parent))}[args.action]()
 
 
 if __name__ == "__main__":
