@@ -263,6 +263,30 @@ def test_readme_ddpg_table_comes_from_the_committed_records(capsys):
         assert summary in " ".join(td3_section.split()), f"the TD3 section lacks {summary!r}"
 
 
+SAC_PAGES = [(RESULTS, "## SAC on Walker2d-v5"),
+             (ROOT / "docs" / "results.zh-CN.md", "## SAC 在 Walker2d-v5 上")]
+
+
+def test_the_sac_section_compares_at_equal_steps_from_the_committed_records(capsys):
+    """SAC's table on both results pages (DDPG, TD3 and SAC at 300,000 steps) is what
+    `ddpg_walker_1m.py at 300000` prints from the committed evaluations.csv files, SAC on at
+    least 3 seeds."""
+    spec = importlib.util.spec_from_file_location("walkers_1m",
+                                                  ROOT / "benchmarks" / "ddpg_walker_1m.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.at_equal_steps(300_000)
+    header, _, *rows = capsys.readouterr().out.splitlines()
+    assert [row.split(" | ")[0] for row in rows] == ["| DDPG", "| TD3", "| SAC"]
+    assert len(rows[2].split(" | ")[1].split(", ")) >= 3, rows[2]  # SAC's seeds at 300k
+    for path, heading in SAC_PAGES:
+        page = path.read_text(encoding="utf-8")
+        assert heading in page, f"{path.name} lacks its SAC section {heading!r}"
+        section = page.split(heading)[1].split("\n## ")[0].splitlines()
+        for row in rows + ([header] if path == RESULTS else []):
+            assert row in section, f"{path.name}'s SAC section lacks {row!r}"
+
+
 def dqn_section(path, heading):
     page = path.read_text(encoding="utf-8")
     assert heading in page, f"{path.name} lacks its DQN section {heading!r}"
