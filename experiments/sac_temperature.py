@@ -11,7 +11,7 @@ pays for entropy at the same rate throughout; a learned alpha falls as long as t
 above its target. Walker2d-v5, 50,000 steps (10,000 of them the random warm-up), an
 evaluation of 5 episodes every 5000 steps, as experiments/td3_fixes.py: a budget that shows
 how the entropy and alpha move, not where the returns end (the 1M runs: docs/results.md).
-Three seeds, as dqn_target_period.py: on a CPU each SAC run of 50,000 steps takes 10 to 30 min.
+Three seeds, as dqn_target_period.py: each 50,000-step SAC run took 17 to 49 min on a busy CPU.
 
     python experiments/sac_temperature.py --workers 6  # 2 variants x 3 seeds: 6 runs
     python experiments/sac_temperature.py --quick       # one seed, a smoke test
