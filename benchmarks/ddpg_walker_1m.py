@@ -154,11 +154,16 @@ def summary(finals, what="at 1M"):
     """'Over the N seeds at 1M: mean M, standard error S' (or how many are there yet)."""
     if len(finals) < 2:
         return f"{len(finals)} of {len(SEEDS)} runs have reached 1M steps: no mean yet"
-    mean = sum(finals) / len(finals)
-    sd = (sum((x - mean) ** 2 for x in finals) / (len(finals) - 1)) ** 0.5  # between seeds
+    mean, se = mean_and_se(finals)
     done = "" if len(finals) == len(SEEDS) else f" (of {len(SEEDS)}; the others have not reached 1M)"
-    return (f"Over the {len(finals)} seeds {what}{done}: mean {mean:.0f}, "
-            f"standard error {sd / len(finals) ** 0.5:.0f}")
+    return f"Over the {len(finals)} seeds {what}{done}: mean {mean:.0f}, standard error {se:.0f}"
+
+
+def mean_and_se(values):
+    """The mean over seeds and its standard error (the spread between seeds / sqrt(n))."""
+    mean = sum(values) / len(values)
+    sd = (sum((x - mean) ** 2 for x in values) / (len(values) - 1)) ** 0.5  # between seeds
+    return mean, sd / len(values) ** 0.5
 
 
 NAMES = {"ddpg_walker": "DDPG", "td3_walker": "TD3", "sac_walker": "SAC"}
@@ -175,7 +180,8 @@ def at_equal_steps(at):
     for script, name in NAMES.items():
         seeds, lasts, highs = [], [], []
         for seed in SEEDS:
-            rows = read(record(seed, script)) if record(seed, script).exists() else []
+            path = record(seed, script)
+            rows = read(path) if path.exists() else []
             if rows and rows[-1][0] >= at:
                 seeds.append(seed)
                 lasts.append(last10(rows, at))
@@ -185,11 +191,8 @@ def at_equal_steps(at):
 
 
 def mean_se(values):
-    if len(values) < 2:
-        return "-"
-    mean = sum(values) / len(values)
-    sd = (sum((x - mean) ** 2 for x in values) / (len(values) - 1)) ** 0.5
-    return f"{mean:.0f} ({sd / len(values) ** 0.5:.0f})"
+    """'mean (se)' for a table cell, '-' below 2 seeds."""
+    return "-" if len(values) < 2 else "{:.0f} ({:.0f})".format(*mean_and_se(values))
 
 
 def plot():

@@ -232,13 +232,20 @@ def same(shown, default):
     return shown == default
 
 
+def walkers_1m():
+    """benchmarks/ddpg_walker_1m.py, loaded fresh (its SCRIPT global is set per test)."""
+    spec = importlib.util.spec_from_file_location("walkers_1m",
+                                                  ROOT / "benchmarks" / "ddpg_walker_1m.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def test_readme_ddpg_table_comes_from_the_committed_records(capsys):
     """The DDPG 1M table in docs/results.md and its summary line are what
     `ddpg_walker_1m.py table` prints from the evaluations.csv files in benchmarks/results/ (no
     cell typed by hand, none left stale)."""
-    spec = importlib.util.spec_from_file_location("ddpg_1m", ROOT / "benchmarks" / "ddpg_walker_1m.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = walkers_1m()
     module.table()
     out = capsys.readouterr().out
     rows = [line for line in out.splitlines() if line.startswith("| ")]
@@ -271,11 +278,7 @@ def test_the_sac_section_compares_at_equal_steps_from_the_committed_records(caps
     """SAC's table on both results pages (DDPG, TD3 and SAC at 300,000 steps) is what
     `ddpg_walker_1m.py at 300000` prints from the committed evaluations.csv files, SAC on at
     least 3 seeds."""
-    spec = importlib.util.spec_from_file_location("walkers_1m",
-                                                  ROOT / "benchmarks" / "ddpg_walker_1m.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    module.at_equal_steps(300_000)
+    walkers_1m().at_equal_steps(300_000)
     header, _, *rows = capsys.readouterr().out.splitlines()
     assert [row.split(" | ")[0] for row in rows] == ["| DDPG", "| TD3", "| SAC"]
     assert len(rows[2].split(" | ")[1].split(", ")) >= 3, rows[2]  # SAC's seeds at 300k
