@@ -215,7 +215,9 @@ def small(tmp_path, **kw):
                                  print_every=300, batch_size=64, hidden=64, run_dir=str(tmp_path), cuda=False), **kw})
 
 
-def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path):
+def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path, monkeypatch):
+    # a few frames per GIF: rendering Walker2d off-screen on a CPU takes about 0.1 s a frame
+    monkeypatch.setitem(mujoco_env.GIF, "max_frames", 4)
     result = ddpg.train(small(tmp_path))
     run = result["run_dir"]
     assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",

@@ -8,7 +8,7 @@ import pytest
 import torch
 
 import grpo_addition as grpo
-from conftest import run_script
+from conftest import run_main, run_script
 
 
 @pytest.mark.quick
@@ -265,8 +265,8 @@ def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
                                          (["--cuda"], "no GPU code"),
                                          (["--rft", "--more-labels"], "pass one"),
                                          (["--start-from", "nowhere"], "no checkpoint at")])
-def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
-    p = run_script("grpo_addition.py", *args, "--run-dir", tmp_path, timeout=60)
+def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path, capsys):
+    p = run_main("grpo_addition.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 

@@ -56,7 +56,7 @@ def test_loss_penalizes_moving_away_from_pi_old():
 
 def test_beta_and_kl_are_logged(tmp_path):
     result = kl.train(kl.Config(run_dir=str(tmp_path), total_timesteps=3000, stop_when_solved=False,
-                                gifs=False, eval_episodes=1, print_every=10**6))
+                                gifs=False, curves=False, eval_episodes=1, print_every=10**6))
     import csv
 
     rows = list(csv.DictReader(open(result["run_dir"] / "progress.csv")))

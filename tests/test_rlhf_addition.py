@@ -10,7 +10,7 @@ import pytest
 import torch
 
 import rlhf_addition as rlhf
-from conftest import run_script
+from conftest import run_main, run_script
 
 
 @pytest.mark.quick
@@ -183,8 +183,8 @@ def test_a_short_run_raises_the_true_score(tmp_path):
     (["--flip", "2"], "--flip must be in [0, 1]"),
     (["--answers-per-prompt", "1"], "--answers-per-prompt must be > 1"),
     (["--cuda"], "no GPU code"), (["--tensorboard"], "no TensorBoard logs")])
-def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path):
-    p = run_script("rlhf_addition.py", *args, "--run-dir", tmp_path, timeout=60)
+def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path, capsys):
+    p = run_main("rlhf_addition.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 
