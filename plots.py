@@ -82,8 +82,10 @@ def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=
     heights = heights or [row_height] * len(rows)
     total = sum(heights) + 0.5  # inches; half an inch for the title
     fig = plt.figure(figsize=(width, total))
-    grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=0.07,
-                            right=0.95, top=1 - 0.55 / total, bottom=0.5 / total)
+    # margins in inches, room for the outer labels (a right-hand axis' too), so that the
+    # picture is saved as laid out, without a second drawing to fit it (bbox_inches="tight")
+    grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=0.85 / width,
+                            right=1 - 0.8 / width, top=1 - 0.55 / total, bottom=0.5 / total)
     for cell, row in zip(grid, rows):
         sub = cell.subgridspec(1, sum(n for n, _ in row), wspace=wspace)
         at = 0
@@ -91,14 +93,15 @@ def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=
             fill([fig.add_subplot(sub[0, at + i]) for i in range(n)], logs)
             at += n
     fig.suptitle(run_dir.name, fontsize=8, y=1 - 0.12 / total)
-    return save_whole(plt, fig, run_dir / name, dpi=dpi)
+    return save_whole(plt, fig, run_dir / name, dpi=dpi, tight=False)
 
 
-def save_whole(plt, fig, path, dpi):
-    """Save `fig` as `path`, written whole (aside, then renamed), Ctrl-C or not; close it."""
+def save_whole(plt, fig, path, dpi, tight=True):
+    """Save `fig` as `path`, written whole (aside, then renamed), Ctrl-C or not; close it.
+    tight: fitted to what it holds, nothing cut at the edges (matplotlib draws it twice)."""
     tmp = Path(f"{path}.tmp.png")
     try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")  # nothing cut at the edges
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight" if tight else None)
         tmp.replace(path)
     finally:
         plt.close(fig)
