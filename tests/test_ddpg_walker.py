@@ -240,10 +240,9 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path, monkeypatch):
     assert np.mean(returns) == pytest.approx(result["evaluations"][-1]["eval_mean"])
 
 
-@pytest.mark.quick
-def test_quick_smoke_run_writes_its_files_and_replays(tmp_path):
-    """The quick layer's DDPG run: 300 steps on the cheap MuJoCo task, every file written,
-    --eval giving back the last evaluation."""
+def test_a_short_run_writes_its_files_and_replays_its_last_evaluation(tmp_path):
+    """300 steps on the cheap MuJoCo task, every file written, --eval giving back the last
+    evaluation (the quick layer's DDPG run is test_every_script.py's smoke run)."""
     result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
                               start_steps=200, eval_every=150, eval_episodes=1))
     run = result["run_dir"]

@@ -82,7 +82,9 @@ def test_bad_input_is_one_line_and_exit_2(script, flags, needle, capsys, tmp_pat
 
 @pytest.mark.quick
 def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
-    result = script.train(smoke(script, tmp_path))
+    # no GIFs here (seconds of the quick layer): test_same_seed_same_logs checks them
+    no_gifs = {} if "gifs" in getattr(script.Config, "UNUSED_FLAGS", ()) else {"gifs": False}
+    result = script.train(smoke(script, tmp_path, **no_gifs))
     run = result["run_dir"]
     assert run.parent == tmp_path and run.name.startswith(f"{script.__name__}__")
     names = {p.name for p in run.iterdir()}
@@ -107,9 +109,14 @@ def test_same_seed_same_logs(script, tmp_path):
     p = run_script(f"{script.__name__}.py", *as_flags({**script.SMOKE, **quiet}), "--run-dir",
                    tmp_path / "0", env={"PYTHONHASHSEED": "12345"})
     assert p.returncode == 0, p.stderr
+    gifs = {"gifs": True} if "gifs" in quiet else {}  # the other seed's run writes its GIFs
     runs = [next((tmp_path / "0").iterdir())] + [
-        script.train(smoke(script, tmp_path / str(i), seed=seed + (i == 2), **quiet))["run_dir"]
+        script.train(smoke(script, tmp_path / str(i), seed=seed + (i == 2),
+                           **{**quiet, **(gifs if i == 2 else {})}))["run_dir"]
         for i in (1, 2)]
+    if gifs:  # a finished run's GIFs, whole (the smoke run in the quick layer writes none)
+        for name in ("before.gif", "after.gif"):
+            assert iio.imread(runs[2] / name).shape[0] >= 2, name
     logs = [name for name in LOGS if (runs[0] / name).exists()]
     assert logs
     for name in logs:
