@@ -8,7 +8,7 @@ import pytest
 import torch
 
 import grpo_addition as grpo
-from conftest import run_main, run_script
+from conftest import run_main
 
 
 @pytest.mark.quick
@@ -245,8 +245,8 @@ def test_a_supervised_phase_that_ends_mid_rise_is_noted(checks, noted, monkeypat
         assert "(0.10 -> 0.38 over its last 30 steps)" in out and "--sft-steps" in out
 
 
-def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
-    p = run_script("grpo_addition.py", *SMALL, "--run-dir", tmp_path, timeout=120)
+def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path, capsys):
+    p = run_main("grpo_addition.py", *SMALL, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 0, p.stderr
     (run,) = tmp_path.iterdir()
     assert {f.name for f in run.iterdir()} >= {"progress.csv", "model.pt", "curve.png", "inside.png"}
@@ -254,7 +254,7 @@ def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path):
     assert len(rows) == 40
     first, last = (sum(float(r["reward"]) for r in part) / 10 for part in (rows[:10], rows[-10:]))
     assert last > first, (first, last)
-    p = run_script("grpo_addition.py", "--eval", run, timeout=120)
+    p = run_main("grpo_addition.py", "--eval", run, capsys=capsys)
     assert p.returncode == 0 and "held-out (100 prompts): pass@1" in p.stdout, p.stderr
     assert p.stdout.startswith(f"{run}: 8 held-out prompts, 8 sampled answers each"), p.stdout
 

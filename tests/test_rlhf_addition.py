@@ -10,7 +10,7 @@ import pytest
 import torch
 
 import rlhf_addition as rlhf
-from conftest import run_main, run_script
+from conftest import run_main
 
 
 @pytest.mark.quick
@@ -156,13 +156,13 @@ SHORT = ["--sft-steps", 600, "--pair-prompts", 300, "--ppo-steps", 25, "--eval-p
 
 
 @pytest.mark.slow
-def test_a_short_run_raises_the_true_score(tmp_path):
+def test_a_short_run_raises_the_true_score(tmp_path, capsys):
     """Seed 0, a shorter supervised phase, PPO on the judge's own score (a verifier; against
     the learned reward the true score can fall, docs/ppo_to_rlhf.md; its critic starts from
     the supervised model at zero, this short run's reward model being at chance) and a larger
     step: PPO's samples score higher at the end than at the start; the saved models answer
     --eval."""
-    p = run_script("rlhf_addition.py", *SHORT, "--run-dir", tmp_path, timeout=300)
+    p = run_main("rlhf_addition.py", *SHORT, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 0, p.stderr
     (run,) = tmp_path.iterdir()
     assert {f.name for f in run.iterdir()} >= {"progress.csv", "model.pt", "curve.png",
@@ -172,7 +172,7 @@ def test_a_short_run_raises_the_true_score(tmp_path):
     assert last > first + 0.01, (first, last)  # seed 0: 0.861 -> 0.896
     held = dict(re.findall(r"^(supervised|PPO): held-out true score ([\d.]+)", p.stdout, re.M))
     assert float(held["PPO"]) > float(held["supervised"]) + 0.02, held  # seed 0: 0.854 -> 0.901
-    p = run_script("rlhf_addition.py", "--eval", run, timeout=120)
+    p = run_main("rlhf_addition.py", "--eval", run, capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert "policy: held-out (200 prompts) true score" in p.stdout
     assert "dpo: held-out (200 prompts) true score" in p.stdout
