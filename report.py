@@ -36,9 +36,10 @@ def pi_holds(play, cfg, threshold, step):
     returns = common.evaluate(cfg.env_id, play[0][2](cfg.eval_seed + 1), cfg.eval_episodes,
                               cfg.eval_seed + 1)
     held = np.mean(returns) >= threshold
-    print(f"check at step {step}: pi as it is now averages {np.mean(returns):.1f} over "
-          f"{len(returns)} episodes: " + ("it holds, training stops" if held else
-                                         f"below {threshold:g}, training goes on"), flush=True)
+    print(f"check at step {step}: the policy as it is now ({play[0][1]}) averages "
+          f"{np.mean(returns):.1f} over {len(returns)} episodes: "
+          + ("it holds, training stops" if held else f"below {threshold:g}, training goes on"),
+          flush=True)
     return held
 
 

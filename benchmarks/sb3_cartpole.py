@@ -69,7 +69,8 @@ class StopWhenSolved(BaseCallback):
             return int(self.model.predict(obs, deterministic=True)[0])
         returns = common.evaluate("CartPole-v1", act, CHECK["episodes"], CHECK["seed"])
         held = np.mean(returns) >= THRESHOLD
-        print(f"check at step {self.num_timesteps}: pi as it is now averages {np.mean(returns):.1f} over "
+        print(f"check at step {self.num_timesteps}: the policy as it is now (greedy: argmax_a "
+              f"Q(s, a)) averages {np.mean(returns):.1f} over "
               f"{len(returns)} episodes: " + ("it holds, training stops" if held else "below, training goes on"),
               flush=True)
         return held

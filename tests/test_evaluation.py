@@ -79,4 +79,5 @@ def test_the_check_plays_the_current_pi(name, capsys):
     play = report.sampled_and_greedy(net, "cpu")
     assert report.pi_holds(play, cfg, 10, step=0)
     assert not report.pi_holds(play, cfg, 475, step=0)
-    assert "check at step 0: pi as it is now averages" in capsys.readouterr().out
+    assert ("check at step 0: the policy as it is now (actions drawn from pi) averages"
+            in capsys.readouterr().out)
