@@ -962,7 +962,7 @@ def test_each_planted_bug_fails_its_learning_stage(bug):
     assert "not solved" in str(failed.value) or "not all 1000" in str(failed.value)
 
 
-def test_the_checker_from_the_command_line(tmp_path):
+def test_the_checker_from_the_command_line(tmp_path, capsys):
     import os
 
     from conftest import run_script
@@ -974,8 +974,9 @@ def test_the_checker_from_the_command_line(tmp_path):
     p = run_script("exercises/check.py", "td_target", timeout=120,
                    env=dict(os.environ, LC_ALL="", LC_MESSAGES="", LANG="zh_CN.UTF-8"))
     assert p.returncode == 1 and "还没写" in p.stdout, p.stdout + p.stderr
-    p = run_script("exercises/check.py", "nope", timeout=120)
-    assert p.returncode == 2 and "invalid choice" in p.stderr
+    with pytest.raises(SystemExit) as stop:  # the same main(), in this process
+        check.main(["nope"])
+    assert stop.value.code == 2 and "invalid choice" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("answer", ["raw rewards", "whole batch", "loss times 0"])
