@@ -293,9 +293,11 @@ def train(cfg: Config):
 
             # --- learn: one critic and one actor update per env step ---
             if learning:
-                losses = ddpg_update(actor, critic, actor_target, critic_target, actor_opt,
-                                     critic_opt, buffer.sample(cfg.batch_size), cfg)
-            run.progress(global_step, losses, (nets["actor"], nets["critic"]))  # nan/inf: stop
+                batch = buffer.sample(cfg.batch_size)
+                critic_loss, actor_loss = ddpg_update(actor, critic, actor_target, critic_target,
+                                                      actor_opt, critic_opt, batch, cfg)
+                losses = dict(critic_loss=critic_loss, actor_loss=actor_loss)  # progress line's
+            run.progress(global_step, losses, nets.values())  # nan/inf: stop
 
             # --- evaluate mu(s), no noise, every eval_every steps; in the warm-up once ---
             if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):

@@ -242,7 +242,8 @@ class EvaluationLog:
         append_csv(self.dir / "episodes.csv", episode_row(*self.episodes[-1]))
 
     def progress(self, step, losses, nets):
-        """Every print_every steps a progress line, after a check that the losses and `nets`
+        """Every print_every steps a progress line with the script's `losses` (name -> number,
+        None before learning starts), after a check that they and the networks among `nets`
         are finite (nan or inf: one line, and a run without a checkpoint is removed)."""
         if step > self.learning_starts:  # steps/s of learning: from this process's first update
             self.timer.setdefault("learning_since", (step, time.time()))
@@ -250,8 +251,8 @@ class EvaluationLog:
             return
         if losses is not None:
             checkpointed = (self.dir / "checkpoint.pt").exists()
-            stop_if_diverged(step, dict(critic_loss=losses[0], actor_loss=losses[1]), nets,
-                             None if checkpointed else self.dir)
+            modules = [net for net in nets if isinstance(net, torch.nn.Module)]  # not optimizers
+            stop_if_diverged(step, losses, modules, None if checkpointed else self.dir)
         now, cfg, timer = time.time(), self.cfg, self.timer
         # steps/s of learning since the last line (or since learning began, if it was later)
         since_step, since = max((timer["step"], timer["time"]),
@@ -264,8 +265,8 @@ class EvaluationLog:
             speed = "learning starts" if step > self.learning_starts else "warm-up (random actions)"
         recent = (f"{np.mean([r for _, r in self.episodes[-RECENT:]]):8.1f}" if self.episodes
                   else "     n/a")
-        loss_text = (f"  critic_loss {losses[0].item():8.3f}  actor_loss {losses[1].item():8.2f}"
-                     if losses is not None else "")
+        loss_text = "".join(f"  {name} {float(value):8.3f}" for name, value in
+                            (losses or {}).items())
         print(f"step {step:>8}  {speed}  return({RECENT}) {recent}{loss_text}  "
               f"{clock(now - timer['start'])}", flush=True)
         self.clock_from(step)

@@ -374,9 +374,9 @@ def train(cfg: Config):
                 critic_loss = update_critics(nets, batch, cfg)
                 actor_loss, entropy = update_actor_and_targets(nets, batch[0], target_entropy,
                                                                cfg)  # [0]: the states
-                losses = (critic_loss, actor_loss)
-            run.progress(global_step, losses, (nets["actor"], nets["critic"], nets["critic2"],
-                                               nets["temperature"]))  # nan/inf: stop
+                losses = dict(critic_loss=critic_loss, actor_loss=actor_loss,  # progress line's
+                              alpha=nets["temperature"]().detach())
+            run.progress(global_step, losses, nets.values())  # nan/inf: stop
 
             # --- evaluate tanh(mean), no sampling, every eval_every steps; in the warm-up once ---
             if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):

@@ -330,8 +330,8 @@ def train(cfg: Config):
                 critic_loss = update_critics(nets, batch, half_width, low_t, high_t, cfg)
                 if global_step % cfg.policy_delay == 0:  # t: env steps = critic updates
                     actor_loss = update_actor_and_targets(nets, batch[0], cfg)  # [0]: states
-                losses = (critic_loss, actor_loss)
-            run.progress(global_step, losses, (nets["actor"], nets["critic"], nets["critic2"]))
+                losses = dict(critic_loss=critic_loss, actor_loss=actor_loss)  # progress line's
+            run.progress(global_step, losses, nets.values())  # nan/inf: stop
 
             # --- evaluate mu(s), no noise, every eval_every steps; in the warm-up once ---
             if global_step % cfg.eval_every == 0 and (learning or not run.evaluations):

@@ -138,14 +138,17 @@ def test_temperature_loss_by_hand_and_alpha_moves_toward_the_target_entropy():
 
 
 @pytest.mark.quick
-def test_a_fixed_alpha_stays_and_a_learned_one_moves(tmp_path):
-    """--alpha 0.2 fixes alpha through training; by default alpha starts at 1 and moves."""
+def test_a_fixed_alpha_stays_and_a_learned_one_moves(tmp_path, capsys):
+    """--alpha 0.2 fixes alpha through training; by default alpha starts at 1 and moves. The
+    progress line shows it (the last line: alpha as the run ended)."""
     small = dict(env_id="InvertedPendulum-v5", total_timesteps=200, start_steps=100,
-                 eval_every=200, eval_episodes=1, batch_size=32, hidden=16, print_every=10**6,
+                 eval_every=200, eval_episodes=1, batch_size=32, hidden=16, print_every=200,
                  gifs=False, curves=False)
     for alpha in (0.2, None):
         run = sac.train(sac.Config(**small, alpha=alpha, run_dir=str(tmp_path)))["run_dir"]
         log_alpha = torch.load(run / "checkpoint.pt", weights_only=True)["temperature"]["log_alpha"]
+        line = next(s for s in capsys.readouterr().out.splitlines() if s.startswith("step "))
+        assert f"alpha {log_alpha.exp().item():8.3f}" in line and "critic_loss" in line, line
         if alpha is None:
             assert 0.5 < log_alpha.exp().item() < 1.0  # 100 steps of Adam 3e-4 lower it from 1
         else:
