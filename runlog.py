@@ -243,16 +243,18 @@ class EvaluationLog:
 
     def progress(self, step, losses, nets):
         """Every print_every steps a progress line with the script's `losses` (name -> number,
-        None before learning starts), after a check that they and the networks among `nets`
-        are finite (nan or inf: one line, and a run without a checkpoint is removed)."""
+        None before learning starts). Before it, a check that they are finite (at every step,
+        so that no nan reaches the next action) and the networks among `nets` (at each line):
+        nan or inf stops the run in one line; a run without a checkpoint is removed."""
         if step > self.learning_starts:  # steps/s of learning: from this process's first update
             self.timer.setdefault("learning_since", (step, time.time()))
-        if step % self.cfg.print_every:
-            return
+        line = step % self.cfg.print_every == 0
         if losses is not None:
             checkpointed = (self.dir / "checkpoint.pt").exists()
-            modules = [net for net in nets if isinstance(net, torch.nn.Module)]  # not optimizers
+            modules = [net for net in nets if line and isinstance(net, torch.nn.Module)]
             stop_if_diverged(step, losses, modules, None if checkpointed else self.dir)
+        if not line:
+            return
         now, cfg, timer = time.time(), self.cfg, self.timer
         # steps/s of learning since the last line (or since learning began, if it was later)
         since_step, since = max((timer["step"], timer["time"]),

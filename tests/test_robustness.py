@@ -183,6 +183,19 @@ def test_a_run_that_diverges_stops_in_one_line_without_a_run_folder(script, args
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("script", ["ddpg_walker", "td3_walker", "sac_walker"])
+def test_a_walker_that_diverges_stops_in_one_line_without_a_run_folder(script, tmp_path, capsys):
+    """The losses a walker names on its progress line and every network it hands over are
+    checked (the losses at every step): a critic step size of 1e30 is caught in one line."""
+    p = run_main(f"{script}.py", "--env-id", "InvertedPendulum-v5", "--total-timesteps", 400,
+                 "--start-steps", 200, "--batch-size", 64, "--print-every", 100, "--critic-lr",
+                 "1e30", "--no-gifs", "--eval-episodes", 1, "--run-dir", tmp_path, capsys=capsys)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert one_line(p.stderr, "training diverged at step"), p.stderr
+    assert "learning rate" in p.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.fixture(scope="module")
 def models(tmp_path_factory):
     """A model.pt of each CartPole script, from a tiny run."""
