@@ -140,7 +140,8 @@ def parse_config(cls, argv=None, description=None):
     docs = {}
     for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
         docs.update(_field_docs(klass))
-    own, unused = vars(cls).get("__annotations__", {}), getattr(cls, "UNUSED_FLAGS", ())
+    # UNUSED_FLAGS: {shared field: why this script has no use for it}: out of --help, refused
+    own, unused = vars(cls).get("__annotations__", {}), getattr(cls, "UNUSED_FLAGS", {})
     for f in sorted(dataclasses.fields(cls), key=lambda f: f.name not in own):
         name = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
         kind = name.replace(" | None", "")  # "float | None" -> "float"
@@ -154,8 +155,9 @@ def parse_config(cls, argv=None, description=None):
         chinese = zh_docs.get(f.name, "（还没有中文说明）") + (f"；默认不设；要在命令行上明确写出“不设”，用 {flag} none"
                                                             if "None" in name else "")
         text = (text + (f"\n{chinese}" if zh else "")).replace("%", "%%")
-        parser.add_argument(flag, default=f.default, **how, help=argparse.SUPPRESS if f.name in
-                            unused else text)  # unused: out of --help
+        hidden = f.name in unused  # out of --help, and absent unless given (then refused)
+        parser.add_argument(flag, default=argparse.SUPPRESS if hidden else f.default, **how,
+                            help=argparse.SUPPRESS if hidden else text)
     args, unknown = parser.parse_known_args(argv)
     if unknown:  # a mistyped flag: the nearest known one, if any is near
         flags = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
@@ -163,6 +165,8 @@ def parse_config(cls, argv=None, description=None):
                                                if u.startswith("--")), ""), flags, n=1)
         parser.error(f"unrecognized arguments: {' '.join(unknown)}"
                      + (f" (did you mean {near[0]}?)" if near else ""))
+    for name in [name for name in unused if name in vars(args)][:1]:  # given anyway
+        parser.error(f"--{name.replace('_', '-')}: {unused[name]}")
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):
             parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")

@@ -96,7 +96,8 @@ class TinyGPT(nn.Module):
 @dataclass
 class Config(cli.OutputFlags):
     """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
-    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda")  # no env, no GPU code
+    UNUSED_FLAGS = dict.fromkeys(("gifs", "eval_episodes", "watch", "gif", "cuda"),
+                                 "no env to play (--eval prints the answers), no GPU code here")
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 3
@@ -159,8 +160,6 @@ class Config(cli.OutputFlags):
                          learning_rate="> 0", clip_coef="> 0", eval_prompts="> 0", eval_every="> 0",
                          label_noise="[0, 1]", more_labels_steps=">= 0")
         cli.check(not (self.rft and self.more_labels), "--rft, --more-labels: pass one, not both")
-        cli.check(not (self.gif or self.watch or self.cuda), "--gif, --watch, --cuda: no env to "
-                  "play (--eval prints the answers), no GPU code here")
         cli.check(self.d_model % self.n_head == 0, f"--d-model ({self.d_model}) must be a "
                   f"multiple of --n-head ({self.n_head})")
 

@@ -59,7 +59,8 @@ def with_scalar_head(model, d_model, zero=False):
 
 @dataclass
 class Config(cli.OutputFlags):
-    UNUSED_FLAGS = ("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard")  # not here
+    UNUSED_FLAGS = dict.fromkeys(("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard"),
+                                 "no env to play, no GPU code, no TensorBoard logs here")
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 2
@@ -130,8 +131,6 @@ class Config(cli.OutputFlags):
     """seed of the sampling in the held-out checks and --eval, apart from training's draws"""
 
     def __post_init__(self):
-        cli.check(not (self.gif or self.watch or self.cuda or self.tensorboard), "--gif, --watch, "
-                  "--cuda, --tensorboard: no env to play, no GPU code, no TensorBoard logs here")
         super().__post_init__()
         cli.check_ranges(self, digits="> 0", d_model="> 0", n_layer="> 0", n_head="> 0",
                          label_noise="[0, 1]", sft_steps="> 0", sft_batch="> 0", pair_prompts="> 0",

@@ -182,7 +182,8 @@ def test_a_short_run_raises_the_true_score(tmp_path, capsys):
     (["--reward-from", "people"], "--reward-from must be model or judge"),
     (["--flip", "2"], "--flip must be in [0, 1]"),
     (["--answers-per-prompt", "1"], "--answers-per-prompt must be > 1"),
-    (["--cuda"], "no GPU code"), (["--tensorboard"], "no TensorBoard logs")])
+    (["--cuda"], "no GPU code"), (["--tensorboard"], "no TensorBoard logs"),
+    (["--gifs"], "--gifs: no env to play"), (["--eval-episodes", "3"], "--eval-episodes: no env")])
 def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path, capsys):
     p = run_main("rlhf_addition.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2 and needle in p.stderr and len(p.stderr.strip().splitlines()) == 1
