@@ -54,11 +54,12 @@ def cartpole_true_values(logits_of, device, gamma, reward_scale, seed, n=11, rol
                 value=total.reshape(n * n, rollouts).mean(1).reshape(n, n))
 
 
-def maps(cfg, nets, device, visited, reward_scale=None):
+def maps(cfg, nets, device, visited, reward_scale=None, labels=("V(s)", "pi(right | s)")):
     """A function that makes inside.png's maps (plots.maps_row) of a CartPole run, or None for
     another env. `nets`: {"untrained"/"trained": (obs -> logits, obs -> V)}; `visited`: the
     last batches' observations (their pole angle and angular velocity are marked); the true V
-    with cfg.gamma, rewards scaled by `reward_scale` (default: cfg.reward_scale)."""
+    with cfg.gamma, rewards scaled by `reward_scale` (default: cfg.reward_scale); `labels`:
+    what the two maps show, as their titles name it."""
     if not cfg.env_id.startswith("CartPole"):
         return None
 
@@ -70,6 +71,7 @@ def maps(cfg, nets, device, visited, reward_scale=None):
             **{when: dict(value=m["value"], policy=m["right"]) for when, m in found.items()},
             true=dict(value=true["value"]), true_x=true["angle"], true_y=true["velocity"],
             x=found["trained"]["angle"], y=found["trained"]["velocity"],
-            xlabel="pole angle (rad)", ylabel="angular velocity", policy_label="pi(right | s)",
+            xlabel="pole angle (rad)", ylabel="angular velocity", value_label=labels[0],
+            policy_label=labels[1],
             visited=np.concatenate(visited)[:, 2:4] if visited else np.zeros((0, 2)))
     return make

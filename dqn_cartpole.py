@@ -327,8 +327,8 @@ def train(cfg: Config):
                 lambda obs: net(obs).max(-1).values)
     nets = dict(untrained=greedy_and_value(untrained), trained=greedy_and_value(q_net))
     before = [("", "", lambda seed: common.pi_actions(untrained, device, seed, greedy=True))]
-    return report.finish_updates(run, threshold, greedy, before, pictures(cfg),
-                                 cartpole_env.maps(cfg, nets, device, run.visited, 1.0))
+    return report.finish_updates(run, threshold, greedy, before, pictures(cfg), cartpole_env.maps(
+        cfg, nets, device, run.visited, 1.0, labels=("max_a Q(s, a)", "greedy: pushes right")))
 
 
 def main(argv=None):

@@ -301,7 +301,8 @@ def maps_row(maps, title=""):
     """Panels: 2-D maps over two state variables (an env helper makes them): maps[when] for
     when in "untrained", "trained" holds "value" and "policy" (x: columns, y: rows); "true",
     if there, the true value beside the learned one on its colour scale; "visited", states
-    marked on the value maps; "x", "y", "xlabel", "ylabel", "policy_label" describe them."""
+    marked on the value maps; "x", "y", "xlabel", "ylabel", "value_label", "policy_label"
+    describe them."""
     panels = [(k, w) for k in ("value", "policy") for w in ("untrained", "trained", "true")
               if w in maps and not (k == "policy" and w == "true")]
 
@@ -316,7 +317,7 @@ def maps_row(maps, title=""):
             image = ax.imshow(maps[when][key], origin="lower", aspect="auto", extent=extent,
                               cmap="viridis" if key == "value" else "coolwarm", **scale)
             ax.figure.colorbar(image, ax=ax, fraction=0.046)
-            what = "V(s)" if key == "value" else maps.get("policy_label", "policy")
+            what = maps.get(f"{key}_label", "V(s)" if key == "value" else "policy")
             name = "true V^pi(s), Monte-Carlo" if when == "true" else f"{what}, {when}"
             ax.set_title(f"{title + ': ' if title else ''}{name}", fontsize=8)
             visited = maps.get("visited")
@@ -443,7 +444,8 @@ def compare_maps(run_dirs, out):
         found.append((run_dir.name.split("__")[0], dict(
             trained=dict(value=m["trained_value"], policy=m["trained_policy"]),
             **{k: (m[k].item() if m[k].ndim == 0 else m[k])
-               for k in ("x", "y", "xlabel", "ylabel", "policy_label")})))
+               for k in ("x", "y", "xlabel", "ylabel", "value_label", "policy_label")
+               if k in m})))  # an older maps.npz has no value_label
     if not found:
         print("error: none of these runs has a maps.npz", file=sys.stderr)
         sys.exit(2)

@@ -60,8 +60,8 @@ def draw_pictures(run, pictures, top=None, maps=None):
         with common.written_whole(run.dir / "maps.npz") as tmp, open(tmp, "wb") as f:
             np.savez(f, **{f"{when}_{key}": maps[when][key] for when in ("untrained", "trained")
                            for key in ("value", "policy")}, true_value=maps["true"]["value"],
-                     **{k: maps[k] for k in ("x", "y", "xlabel", "ylabel", "policy_label",
-                                             "true_x", "true_y", "visited")})
+                     **{k: maps[k] for k in ("x", "y", "xlabel", "ylabel", "value_label",
+                                             "policy_label", "true_x", "true_y", "visited")})
     inside = (plots.draw(run.dir, "inside.png", rows, logs, wspace=0.7 if top else 0.3)
               if rows else None)
     return curve, inside

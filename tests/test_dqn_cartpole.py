@@ -134,3 +134,13 @@ def test_a_seeded_run_solves_cartpole():
     ex = check.EXERCISES["dqn_target"]
     result = check.learns(ex, getattr(ex.owner(), ex.function))  # raises check.Failed if not
     assert result["solved"] and np.mean(result["greedy_returns"]) >= 475
+
+
+def test_its_maps_are_titled_max_q_and_the_greedy_action(tmp_path):
+    """DQN's maps are max_a Q(s, a) and its greedy action, and say so (maps.npz keeps the
+    titles, as plots.py --maps shows them)."""
+    run = dqn.train(dqn.Config(**dqn.SMOKE, gifs=False, run_dir=str(tmp_path),
+                               print_every=10**6))["run_dir"]
+    saved = np.load(run / "maps.npz")
+    assert saved["value_label"].item() == "max_a Q(s, a)"
+    assert saved["policy_label"].item() == "greedy: pushes right"

@@ -374,3 +374,24 @@ def test_tensorboard_leaves_out_a_text_column(tmp_path):
     events.Reload()
     assert events.Tags()["scalars"] == ["charts/loss"]
     assert [(e.step, e.value) for e in events.Scalars("charts/loss")] == [(1, 0.5), (2, 0.25)]
+
+
+@pytest.mark.quick
+def test_the_maps_are_titled_with_what_the_script_says_they_show():
+    """The maps' titles name what they show: V(s) and pi(right | s) by default, what a script
+    hands over otherwise (DQN's are max_a Q and the greedy action)."""
+    import plots
+    from matplotlib.figure import Figure
+
+    grid = np.zeros((3, 3))
+    maps = dict(untrained=dict(value=grid, policy=grid), trained=dict(value=grid + 1, policy=grid),
+                true=dict(value=grid + 2), x=np.arange(3.0), y=np.arange(3.0))
+    for labels, value, policy in (({}, "V(s)", "policy"),
+                                  (dict(value_label="max_a Q(s, a)", policy_label="greedy"),
+                                   "max_a Q(s, a)", "greedy")):
+        n, fill = plots.maps_row({**maps, **labels})
+        axes = Figure().subplots(1, n)
+        fill(axes, None)
+        assert [ax.get_title() for ax in axes] == [
+            f"{value}, untrained", f"{value}, trained", "true V^pi(s), Monte-Carlo",
+            f"{policy}, untrained", f"{policy}, trained"]
