@@ -177,7 +177,8 @@ def parse_config(cls, argv=None, description=None):
     try:
         for name in ("eval", "resume"):  # runs/latest: this script's newest run folder there
             if getattr(args, name, None):
-                setattr(args, name, latest_run(getattr(args, name), script))
+                setattr(args, name, latest_run(getattr(args, name), script,
+                                               "checkpoint.pt" if name == "resume" else "model.pt"))
         cfg = cls(**vars(args))
     except (ValueError, UserError) as e:
         parser.error(str(e))
@@ -187,10 +188,12 @@ def parse_config(cls, argv=None, description=None):
     return cfg
 
 
-def latest_run(path, script):
+def latest_run(path, script, needs="model.pt"):
     """`path` with a part named `latest` (runs/latest, runs/latest/best.pt) read as the newest
-    run folder of `script` in that folder, by the time in its name; a path that exists as it
-    is stays as it is.
+    run folder of `script` in that folder, by the time in its name, that holds the file asked
+    for (the rest of `path`, or else `needs`); a newer one without it (killed before it wrote
+    one, or still training) is passed over, with a line that says so. A path that exists as
+    it is stays as it is.
 
     >>> latest_run("runs/my_script__some_env__seed0__20260101-120000", "my_script")
     'runs/my_script__some_env__seed0__20260101-120000'
@@ -199,11 +202,18 @@ def latest_run(path, script):
     if "latest" not in parts or Path(path).exists():
         return path
     at = parts.index("latest")
-    parent = Path(*parts[:at]) if at else Path(".")
+    parent, inside = Path(*parts[:at]) if at else Path("."), Path(*parts[at + 1:] or [needs])
     runs = sorted(parent.glob(f"{script}__*"), key=lambda run: run.name.split("__")[-1])
     if not runs:
         raise UserError(f"{path}: no run of {script}.py in {parent} yet")
-    return str(Path(runs[-1], *parts[at + 1:]))
+    ready = [run for run in runs if (run / inside).exists()]
+    if not ready:
+        raise UserError(f"{path}: no run of {script}.py in {parent} has {inside} yet (the "
+                        f"newest: {runs[-1]})")
+    if ready[-1] != runs[-1]:
+        print(f"{path}: {runs[-1].name} has no {inside} (stopped before writing one, or still "
+              f"training): {ready[-1].name} instead", file=sys.stderr, flush=True)
+    return str(Path(ready[-1], *parts[at + 1:]))
 
 
 def _field_docs(klass):

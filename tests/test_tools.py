@@ -433,19 +433,40 @@ def test_cartpole_maps_are_the_networks_at_grid_points():
     assert maps["angle"][0] == -0.21 and maps["velocity"][-1] == 2.0
 
 
-def test_runs_latest_is_the_newest_run_of_this_script(tmp_path):
+def test_runs_latest_is_the_newest_run_of_this_script(tmp_path, capsys):
     """runs/latest (and runs/latest/best.pt) name the newest run folder of the script, by the
-    time in its name, whatever the env or seed; another script's runs do not count."""
+    time in its name, whatever the env or seed; another script's runs do not count. A newer
+    run without the file asked for (killed before writing model.pt, or still training) is
+    passed over in a line that says so."""
     for name in ("ddpg_walker__Walker2d-v5__seed0__20260101-120000",
                  "ddpg_walker__Hopper-v5__seed3__20260102-090000",
                  "td3_walker__Walker2d-v5__seed0__20260105-000000"):
         (tmp_path / name).mkdir()
+        for file in ("model.pt", "best.pt", "checkpoint.pt"):
+            (tmp_path / name / file).touch()
     newest = tmp_path / "ddpg_walker__Hopper-v5__seed3__20260102-090000"
     assert cli.latest_run(str(tmp_path / "latest"), "ddpg_walker") == str(newest)
     assert cli.latest_run(str(tmp_path / "latest" / "best.pt"), "ddpg_walker") == str(
         newest / "best.pt")
     with pytest.raises(UserError, match="no run of ppo_cartpole.py"):
         cli.latest_run(str(tmp_path / "latest"), "ppo_cartpole")
+    assert capsys.readouterr().err == ""
+    killed = tmp_path / "ddpg_walker__Walker2d-v5__seed1__20260103-000000"
+    killed.mkdir()
+    (killed / "episodes.csv").touch()
+    assert cli.latest_run(str(tmp_path / "latest"), "ddpg_walker") == str(newest)
+    assert cli.latest_run(str(tmp_path / "latest"), "ddpg_walker", "checkpoint.pt") == str(newest)
+    err = capsys.readouterr().err
+    assert err.count("\n") == 2 and f"{killed.name} has no model.pt" in err, err
+    (killed / "model.pt").touch()  # it wrote one: it is the newest again
+    assert cli.latest_run(str(tmp_path / "latest"), "ddpg_walker") == str(killed)
+    assert cli.latest_run(str(tmp_path / "latest"), "ddpg_walker", "checkpoint.pt") == str(newest)
+    assert f"{killed.name} has no checkpoint.pt" in capsys.readouterr().err
+    for file in ("model.pt", "best.pt", "checkpoint.pt"):
+        for run in tmp_path.glob("ddpg_walker__*"):
+            (run / file).unlink(missing_ok=True)
+    with pytest.raises(UserError, match="has model.pt yet"):
+        cli.latest_run(str(tmp_path / "latest"), "ddpg_walker")
 
 
 def test_eval_runs_latest_from_the_command_line(tmp_path):
