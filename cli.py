@@ -7,13 +7,11 @@ help the string under it, bool -> `--x/--no-x`, `float | None` also takes `none`
 """
 
 import argparse
-import ast
 import contextlib
 import dataclasses
 import difflib
 import inspect
 import sys
-import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -139,7 +137,7 @@ def parse_config(cls, argv=None, description=None):
     parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage
     docs = {}
     for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
-        docs.update(_field_docs(klass))
+        docs.update(help_zh.field_docs(klass))
     # UNUSED_FLAGS: {shared field: why this script has no use for it}: out of --help, refused
     own, unused = vars(cls).get("__annotations__", {}), getattr(cls, "UNUSED_FLAGS", {})
     for f in sorted(dataclasses.fields(cls), key=lambda f: f.name not in own):
@@ -214,16 +212,6 @@ def latest_run(path, script, needs="model.pt"):
         print(f"{path}: {runs[-1].name} has no {inside} (stopped before writing one, or still "
               f"training): {ready[-1].name} instead", file=sys.stderr, flush=True)
     return str(Path(ready[-1], *parts[at + 1:]))
-
-
-def _field_docs(klass):
-    """{field: the string under it} of one dataclass, read from its source."""
-    if "__dataclass_fields__" not in vars(klass):
-        return {}
-    body = ast.parse(textwrap.dedent(inspect.getsource(klass))).body[0].body
-    return {node.target.id: " ".join(str(nxt.value.value).split())
-            for node, nxt in zip(body, body[1:]) if isinstance(node, ast.AnnAssign)
-            and isinstance(nxt, ast.Expr) and isinstance(nxt.value, ast.Constant)}
 
 
 def _or_none(convert):

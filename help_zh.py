@@ -3,10 +3,14 @@ each flag's English help, read from locale/flags.zh-CN.md, and the script's 中�
 English description. cli.parse_config asks it; nothing here knows a script."""
 
 import argparse
+import ast
+import dataclasses
 import importlib
+import inspect
 import os
 import re
 import sys
+import textwrap
 from pathlib import Path
 
 HELP_ZH = Path(__file__).resolve().parent / "locale" / "flags.zh-CN.md"
@@ -31,25 +35,49 @@ def chinese_locale():
 def flags(script, module=None):
     """{field: its Chinese line} for `script` (its name), read from HELP_ZH's tables: a section
     whose heading names fewer scripts, `script` among them, wins over one naming more, and
-    every section wins over 所有脚本 (all scripts); a flag of no section naming `script` (a
-    new script: e.g. the solved rule's flags) takes the line of the section naming the most
-    scripts that has it; the script's own FLAGS_ZH ({field: line}, if it has one: a new
-    script needs no other file) wins over them all."""
+    every section wins over 所有脚本 (all scripts). A script that no heading names (a new one,
+    or a copy) takes a flag's line from a named script whose English help of that flag,
+    default included, is its own (a Chinese line translates an English one), the nearest such
+    script first (the one with the most flags like it); the script's own FLAGS_ZH ({field:
+    line}, if it has one: a new script needs no other file) wins over them all."""
     sections = []
     for line in HELP_ZH.read_text(encoding="utf-8").splitlines():
         if line.startswith("## "):
             sections.append((re.findall(r"`(\w+)\.py`", line), {}))
         elif sections and (row := re.match(r"\| `--([\w-]+)` \| (.+) \|$", line)):
             sections[-1][1][row[1].replace("-", "_")] = row[2]
-    found, elsewhere = {}, {}
+    found = {}
     for names, rows in sorted(sections, key=lambda s: (bool(s[0]), -len(s[0]))):
         if not names or script in names:
             found.update(rows)
-        for name, line in rows.items():  # a script not named yet: the shared flags' lines
-            elsewhere.setdefault(name, line)
-    found = {**elsewhere, **found}
     module = module or importlib.import_module(script)  # a script run as __main__: given
+    named = {name for names, _ in sections for name in names}
+    if script not in named:
+        mine = english(module.Config)
+        theirs = {name: english(importlib.import_module(name).Config) for name in sorted(named)}
+        alike = {name: {f for f, e in mine.items() if theirs[name].get(f) == e} for name in theirs}
+        for name in sorted(theirs, key=lambda name: len(alike[name])):  # the nearest last: wins
+            found.update({f: line for f, line in flags(name).items() if f in alike[name]})
     return {**found, **getattr(module, "FLAGS_ZH", {})}
+
+
+def english(cls):
+    """{field: (its English help, its default)} of a Config, its bases' fields included."""
+    docs = {}
+    for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
+        docs.update(field_docs(klass))
+    return {f.name: (docs.get(f.name, ""), f.default) for f in dataclasses.fields(cls)}
+
+
+def field_docs(klass):
+    """{field: the string under it} of one dataclass, read from its source."""
+    if "__dataclass_fields__" not in vars(klass):
+        return {}
+    body = ast.parse(textwrap.dedent(inspect.getsource(klass))).body[0].body
+    return {node.target.id: " ".join(str(nxt.value.value).split())
+            for node, nxt in zip(body, body[1:]) if isinstance(node, ast.AnnAssign)
+            and isinstance(nxt, ast.Expr) and isinstance(nxt.value, ast.Constant)}
+
 
 
 def overview(cls, description):
