@@ -230,12 +230,17 @@ def three_updates(kept):
 
 def histograms(array, by_sign_of=None, band=None):
     """Panels (3): the kept `array` at an early, a middle and a late update of those that keep
-    it (update k: the k-th of them), split by the sign of the kept `by_sign_of` if given;
+    it (update k: the k-th of them; a name no update kept stops the picture with a KeyError),
+    split by the sign of the kept `by_sign_of` if given;
     `band`: (low, high) dashed, and, split by sign, shaded outside where a sample of that sign
     gets no gradient (the clip binds: above high for +, below low for -)."""
     def fill(axes, logs):
         lo, hi = band if band is not None else (np.inf, -np.inf)
         kept = [k for k in logs["kept"] if array in k[1]]  # e.g. none in a supervised stage
+        named = sorted({name for _, arrays in logs["kept"] for name in arrays})
+        if named and not kept:  # updates kept arrays, none of them this one: a wrong name
+            raise KeyError(f"a panel draws the array {array!r}, which no update kept (kept: "
+                           f"{named})")
         for ax, (update, step, arrays) in zip(axes, three_updates(kept)):
             r = arrays[array]
             if by_sign_of is None:  # bins over the values, fine where they crowd; band: dashed
@@ -334,7 +339,8 @@ def maps_row(maps, title=""):
 # script's own columns take the tags it declares (charts/<column> if none).
 TAGS = {"return": "charts/episodic_return", "recent_return": "charts/recent_return",
         "sps": "charts/SPS", "eval_mean": "eval/episodic_return",
-        "eval_std": "eval/episodic_return_std", "train_return_mean10": "charts/episodic_return_mean10"}
+        "eval_std": "eval/episodic_return_std",
+        "train_return_mean10": "charts/episodic_return_mean10"}
 NO_TENSORBOARD = "--tensorboard needs the tensorboard package: pip install tensorboard"
 
 
@@ -464,7 +470,8 @@ def main(argv=None):
     parser.add_argument("--out", default=None,
                         help="the PNG to write (default: compare.png, or maps.png with --maps)")
     parser.add_argument("--maps", action="store_true",
-                        help="the runs' trained maps of V and pi side by side (runs that keep maps.npz)")
+                        help="the runs' trained maps of V and pi side by side (runs that keep "
+                             "maps.npz)")
     args = parser.parse_args(argv)
     out = args.out or ("maps.png" if args.maps else "compare.png")
     try:
