@@ -5,6 +5,7 @@ training loop at a whole step. Every file is written whole or not at all.
 
 import dataclasses
 import os
+import re
 import signal
 import threading
 import time
@@ -34,7 +35,13 @@ def load_checkpoint(path, required=(), script=None):
         raise UserError(f"no checkpoint at {path}{where}")
     try:  # weights_only: tensors and plain values, never arbitrary Python objects
         ckpt = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception:  # cut short, damaged, not a torch file, or Python objects inside
+    except Exception as e:  # cut short, damaged, not a torch file, or Python objects inside
+        refused = re.search(r"Unsupported global: GLOBAL (\S+)", str(e))
+        if refused:  # whole, but it holds an object that torch will not load safely
+            raise UserError(f"cannot read {path}: it holds a {refused[1]} object, which is not "
+                            "loaded (only tensors and plain values are, for safety); if a script "
+                            "here wrote it, it saved another object by mistake (a numpy number: "
+                            "save float(x))") from None
         raise UserError(f"cannot read {path}: truncated, corrupt or not a checkpoint of these "
                         "scripts") from None
     if script and isinstance(ckpt, dict) and ckpt.get("script") != script:

@@ -39,8 +39,8 @@ def append_csv(path, row):
         with open(path, newline="") as f:
             header = next(csv.reader(f), [])
         if header != list(row):
-            raise ValueError(f"{path}: a row with the columns {list(row)} under the header "
-                             f"{header}")
+            raise UserError(f"{path}: a row with the columns {list(row)} under the header "
+                            f"{header}")
     with open(path, "a", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(row))
         if new:
@@ -284,6 +284,8 @@ class EvaluationLog:
         mean, std = float(np.mean(returns)), float(np.std(returns))
         best = mean > max((e["eval_mean"] for e in self.evaluations), default=-float("inf"))
         declared(self.logged, columns, "evaluations.csv")
+        columns = {k: v.item() if isinstance(v, (np.generic, torch.Tensor)) else v  # plain
+                   for k, v in columns.items()}  # numbers: checkpoint.pt loads weights_only
         done = [ret for s, ret in self.episodes if s <= step]
         self.evaluations.append(dict(
             global_step=step, eval_mean=mean, eval_std=std, episodes=len(done),
@@ -302,6 +304,13 @@ class EvaluationLog:
         """The logs as they were at the checkpoint: rows a killed run wrote after it go (the
         resumed run writes them again, identically); the run's clock goes on from there."""
         self.episodes[:], self.evaluations[:] = state["episodes"], state["evaluations"]
+        ours = {"global_step", "eval_mean", "eval_std", "episodes", "train_return_mean10",
+                *self.logged}  # evaluation()'s columns
+        theirs = set(self.evaluations[0]) if self.evaluations else ours
+        if theirs != ours:  # a column added to the script (or taken out) since the run began
+            raise UserError(f"{self.dir}'s evaluations.csv has the columns {sorted(theirs)}; "
+                            f"this {self.script}.py logs {sorted(ours)}: resume it with the "
+                            "version that began it, or begin a new run")
         self.timer["start"] -= state["elapsed"]
         for stale in self.dir.glob("*.tmp*"):  # a write that a kill cut short
             stale.unlink()

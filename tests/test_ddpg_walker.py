@@ -415,7 +415,10 @@ def test_ctrl_c_saves_a_checkpoint_at_the_step_it_stopped_and_resume_is_the_unbr
     assert_same_run(unbroken["run_dir"], run)
 
 
-def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbroken, tmp_path):
+def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbroken, tmp_path,
+                                                                           monkeypatch):
+    """A run resumed by a script that has since declared another column is refused at once,
+    in one line (its rows could not share one evaluations.csv)."""
     import shutil
 
     run = tmp_path / "run"
@@ -424,6 +427,11 @@ def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbro
         ddpg.train(ddpg.Config(resume=str(run)))
     with pytest.raises(UserError, match="--actor-lr 0.001 differs from the saved 0.0003"):
         ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700, actor_lr=1e-3))
+    with monkeypatch.context() as m:
+        m.setattr(ddpg, "LOGGED", {**ddpg.LOGGED, "eval_length": (None, "episode length")})
+        with pytest.raises(UserError, match="this ddpg_walker.py logs .*'eval_length'.*: resume "
+                                            "it with the version that began it"):
+            ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))
     result = ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))
     assert [e["global_step"] for e in result["evaluations"]][-2:] == [2400, 2700]
     ckpt = torch.load(run / "checkpoint.pt", weights_only=True)

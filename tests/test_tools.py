@@ -209,9 +209,13 @@ def test_checkpoint_round_trip_and_bad_files(tmp_path):
     # A pickle with Python objects in it is refused, and nothing suggests weights_only=False.
     unsafe = tmp_path / "unsafe.pt"
     torch.save(dict(w=Demo()), unsafe)
-    with pytest.raises(UserError, match="not a checkpoint of these scripts") as e:
+    with pytest.raises(UserError, match="holds a test_tools.Demo object, which is not loaded") as e:
         checkpoints.load_checkpoint(unsafe)
     assert "weights_only" not in str(e.value)
+    numpy_number = tmp_path / "numpy.pt"  # a column logged as np.float64, say
+    torch.save(dict(evaluations=[dict(eval_length=np.float64(74.3))]), numpy_number)
+    with pytest.raises(UserError, match=r"holds a numpy\S* object.*save float\(x\)"):
+        checkpoints.load_checkpoint(numpy_number)
     # A run folder stands for its model.pt; a folder without one says so.
     checkpoints.save_checkpoint(dict(w=torch.ones(1)), tmp_path / "model.pt")
     assert torch.equal(checkpoints.load_checkpoint(tmp_path)["w"], torch.ones(1))
@@ -496,7 +500,7 @@ def test_the_time_left_does_not_flicker_at_a_minute():
 def test_a_csv_row_with_other_columns_than_its_header_is_refused(tmp_path):
     """A column missing from some rows (an 8-field header over 9-field rows) cannot happen."""
     runlog.append_csv(tmp_path / "log.csv", dict(global_step=1, a=1.0, b=None))
-    with pytest.raises(ValueError, match="under the header"):
+    with pytest.raises(UserError, match="under the header"):
         runlog.append_csv(tmp_path / "log.csv", dict(global_step=2, a=1.0))
     assert (tmp_path / "log.csv").read_text().splitlines() == ["global_step,a,b", "1,1,nan"]
 
@@ -519,3 +523,22 @@ def test_none_is_not_divergence_but_nan_is():
     runlog.stop_if_diverged(1, dict(loss=0.5, pass1=None), ())
     with pytest.raises(UserError, match="diverged at step 1: nan or inf in loss"):
         runlog.stop_if_diverged(1, dict(loss=float("nan")), ())
+
+
+@pytest.mark.quick
+def test_an_evaluations_numpy_or_tensor_number_is_kept_as_a_plain_one(tmp_path, capsys):
+    """A script's column given as np.float64 (np.mean's) or a 0-dim tensor is written and kept
+    as a plain number: checkpoint.pt, which holds every row, still loads with weights_only."""
+    import types
+
+    cfg = types.SimpleNamespace(resume=None, run_dir=str(tmp_path), env_id="Env-v0", seed=0,
+                                print_every=1000, total_timesteps=100)
+    logged = dict(length=(None, "mean episode length"), q=(None, "Q"))
+    run = runlog.EvaluationLog("some_script", cfg, "cpu", logged, 0, 10)
+    run.evaluation(10, [1.0, 2.0], length=np.mean([3, 4]), q=torch.tensor(0.5))
+    row = run.state_dict()["evaluations"][0]
+    assert type(row["length"]) is float and type(row["q"]) is float and row["q"] == 0.5
+    checkpoints.save_checkpoint(dict(log=run.state_dict()), tmp_path / "c.pt")
+    loaded = checkpoints.load_checkpoint(tmp_path / "c.pt")["log"]["evaluations"][0]
+    assert (loaded["length"], loaded["q"]) == (3.5, 0.5)
+    assert (run.dir / "evaluations.csv").read_text().splitlines()[1].endswith(",3.5,0.5")
