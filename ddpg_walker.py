@@ -242,7 +242,7 @@ SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,
 
 # ==== Training ============================================================================
 def train(cfg: Config):
-    """Train DDPG with `cfg`, or continue the run cfg.resume; returns report.finish_evaluations()."""
+    """Train DDPG with `cfg`, or resume the run cfg.resume; returns report.finish_evaluations()."""
     if cfg.resume:
         cfg = checkpoints.config_to_resume(cfg, SCRIPT)  # the saved run's settings
     # --- seeding and setup ---
