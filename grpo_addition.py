@@ -452,9 +452,6 @@ def train(cfg: Config):
               f"{result['after'][1]:.3f} (phase {second} took {time.time() - phase_start:.0f} s)",
               flush=True)
     report.draw_logged(run, pictures(cfg, sft_steps, samples))  # also after a Ctrl-C
-    if run.interrupted:  # main() then exits with 130
-        print(f"interrupted: {run.dir} holds model.pt as training left it, curve.png and "
-              "inside.png of what was logged", flush=True)
     return dict(result, interrupted=run.interrupted)
 
 

@@ -70,15 +70,24 @@ def draw_pictures(run, pictures, top=None, maps=None):
 def draw_logged(run, pictures):
     """After the training of a script without an env, a Ctrl-C too: curve.png and inside.png
     of what was logged (draw_pictures, --curves) and its TensorBoard scalars (--tensorboard);
-    nothing before the first logged row."""
-    if not (run.dir / "progress.csv").exists():
-        return
-    if run.cfg.tensorboard:
-        plots.to_tensorboard(run.dir, tags=run.tags)
-    if run.cfg.curves:
-        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            curve, inside = draw_pictures(run, pictures)
-            print(f"curve: {curve}\ninside: {inside}", flush=True)
+    nothing before the first logged row. After a Ctrl-C, the line that says where it stopped
+    and what its folder holds (main() then exits with 130)."""
+    if (run.dir / "progress.csv").exists():
+        if run.cfg.tensorboard:
+            plots.to_tensorboard(run.dir, tags=run.tags)
+        if run.cfg.curves:
+            with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+                curve, inside = draw_pictures(run, pictures)
+                print(f"curve: {curve}\ninside: {inside}", flush=True)
+    if run.interrupted:
+        interrupted_at(run, run.global_step, "--eval uses its model.pt, as training left it")
+
+
+def interrupted_at(run, step, then):
+    """The last line after a Ctrl-C: the step, the files the run folder holds, what next."""
+    print(f"\ninterrupted at step {step}: {run.dir} holds "
+          f"{', '.join(sorted(f.name for f in run.dir.iterdir()))} "
+          f"({then}: python {run.script}.py --eval {run.dir})", flush=True)
 
 
 def finish_updates(run, threshold, play, before, pictures, maps=None):
@@ -97,9 +106,7 @@ def finish_updates(run, threshold, play, before, pictures, maps=None):
         if cfg.curves and (run_dir / "progress.csv").exists():
             with common.ctrl_c_deferred():  # a second Ctrl-C waits for the pictures
                 draw_pictures(run, pictures, top)
-        print(f"\ninterrupted at step {step}: {run_dir} holds "
-              f"{', '.join(sorted(f.name for f in run_dir.iterdir()))} "
-              f"(replay: python {run.script}.py --eval {run_dir})", flush=True)
+        interrupted_at(run, step, "replay")
         return result
     elapsed = time.time() - run.start_time
     short = cfg.total_timesteps - step if run.solved_step is None else 0

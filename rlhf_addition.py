@@ -407,9 +407,6 @@ def train(cfg: Config):
                         for y in (test_w, test_l))
             print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
     report.draw_logged(run, pictures(r_w - r_l))  # also after a Ctrl-C
-    if run.interrupted:
-        print(f"interrupted: {run.dir} holds model.pt as training left it, curve.png and "
-              "inside.png of what was logged", flush=True)
     return dict(result, interrupted=run.interrupted)
 
 

@@ -300,7 +300,10 @@ def test_ctrl_c_keeps_the_model(tmp_path):
     assert {f.name for f in run.iterdir()} >= {"model.pt", "progress.csv", "curve.png",
                                                  "inside.png"}
     assert not list(run.glob("*.tmp"))
-    assert "model.pt as training left it, curve.png and inside.png" in out
+    last = out.strip().splitlines()[-1]  # the same last line as every script's
+    assert last.startswith("interrupted at step") and "curve.png, inside.png, model.pt" in last
+    assert f"--eval uses its model.pt, as training left it: python grpo_addition.py --eval {run}" \
+        in last, last
 
 
 @pytest.mark.quick
