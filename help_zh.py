@@ -36,10 +36,10 @@ def flags(script, module=None):
     """{field: its Chinese line} for `script` (its name), read from HELP_ZH's tables: a section
     whose heading names fewer scripts, `script` among them, wins over one naming more, and
     every section wins over 所有脚本 (all scripts). A script that no heading names (a new one,
-    or a copy) takes a flag's line from a named script whose English help of that flag,
-    default included, is its own (a Chinese line translates an English one), the nearest such
-    script first (the one with the most flags like it); the script's own FLAGS_ZH ({field:
-    line}, if it has one: a new script needs no other file) wins over them all."""
+    or a copy) takes a flag's line from a named script whose English help of that flag is its
+    own (a Chinese line translates an English one), the nearest such script first (the one
+    with the most flags like it); the script's own FLAGS_ZH ({field: line}, if it has one: a
+    new script needs no other file) wins over them all."""
     sections = []
     for line in HELP_ZH.read_text(encoding="utf-8").splitlines():
         if line.startswith("## "):
@@ -62,11 +62,11 @@ def flags(script, module=None):
 
 
 def english(cls):
-    """{field: (its English help, its default)} of a Config, its bases' fields included."""
+    """{field: its English help} of a Config, its bases' fields included."""
     docs = {}
     for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
         docs.update(field_docs(klass))
-    return {f.name: (docs.get(f.name, ""), f.default) for f in dataclasses.fields(cls)}
+    return {f.name: docs[f.name] for f in dataclasses.fields(cls) if docs.get(f.name)}
 
 
 def field_docs(klass):

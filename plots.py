@@ -222,6 +222,18 @@ def spread(prefix, title, hlines=()):
     return 1, fill
 
 
+def kept_with(logs, *names):
+    """The updates that kept the arrays `names` (none in a supervised stage, say); a name that
+    no update kept, where updates kept others, stops the picture with a KeyError naming it."""
+    kept = [k for k in logs["kept"] if all(name in k[1] for name in names)]
+    named = sorted({name for _, arrays in logs["kept"] for name in arrays})
+    if named and not kept:  # updates kept arrays, not these: a wrong name
+        missing = [name for name in names if name not in named]
+        raise KeyError(f"a panel draws the arrays {missing}, which no update kept (kept: "
+                       f"{named})")
+    return kept
+
+
 def three_updates(kept):
     """An early, a middle and a late update of `kept` (its first, middle and last)."""
     picks = sorted({0, len(kept) // 2, len(kept) - 1}) if kept else []
@@ -230,17 +242,13 @@ def three_updates(kept):
 
 def histograms(array, by_sign_of=None, band=None):
     """Panels (3): the kept `array` at an early, a middle and a late update of those that keep
-    it (update k: the k-th of them; a name no update kept stops the picture with a KeyError),
-    split by the sign of the kept `by_sign_of` if given;
+    it (update k: the k-th of them; kept_with), split by the sign of the kept `by_sign_of` if
+    given;
     `band`: (low, high) dashed, and, split by sign, shaded outside where a sample of that sign
     gets no gradient (the clip binds: above high for +, below low for -)."""
     def fill(axes, logs):
         lo, hi = band if band is not None else (np.inf, -np.inf)
-        kept = [k for k in logs["kept"] if array in k[1]]  # e.g. none in a supervised stage
-        named = sorted({name for _, arrays in logs["kept"] for name in arrays})
-        if named and not kept:  # updates kept arrays, none of them this one: a wrong name
-            raise KeyError(f"a panel draws the array {array!r}, which no update kept (kept: "
-                           f"{named})")
+        kept = kept_with(logs, array)
         for ax, (update, step, arrays) in zip(axes, three_updates(kept)):
             r = arrays[array]
             if by_sign_of is None:  # bins over the values, fine where they crowd; band: dashed
@@ -292,7 +300,7 @@ def scatters(x, y, xlabel, ylabel):
     """Panels (3): the kept `y` against the kept `x` at an early, a middle and a late update,
     with the diagonal y = x."""
     def fill(axes, logs):
-        for ax, (update, step, arrays) in zip(axes, three_updates(logs["kept"])):
+        for ax, (update, step, arrays) in zip(axes, three_updates(kept_with(logs, x, y))):
             ax.scatter(arrays[x], arrays[y], s=3, alpha=0.4)
             both = np.concatenate([arrays[x], arrays[y]])
             ax.plot([both.min(), both.max()], [both.min(), both.max()], color="k", lw=0.8)

@@ -428,8 +428,8 @@ def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbro
     with pytest.raises(UserError, match="--actor-lr 0.001 differs from the saved 0.0003"):
         ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700, actor_lr=1e-3))
     with monkeypatch.context() as m:
-        m.setattr(ddpg, "LOGGED", {**ddpg.LOGGED, "eval_length": (None, "episode length")})
-        with pytest.raises(UserError, match="this ddpg_walker.py logs .*'eval_length'.*: resume "
+        m.setattr(ddpg, "LOGGED", {**ddpg.LOGGED, "added_later": (None, "a new column")})
+        with pytest.raises(UserError, match="this ddpg_walker.py logs .*'added_later'.*: resume "
                                             "it with the version that began it"):
             ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))
     result = ddpg.train(ddpg.Config(resume=str(run), total_timesteps=2700))

@@ -89,6 +89,8 @@ def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
     assert run.parent == tmp_path and run.name.startswith(f"{script.__name__}__")
     names = {p.name for p in run.iterdir()}
     assert "model.pt" in names and names & set(LOGS), names
+    if hasattr(script.Config, "env_id"):  # a run of seconds in which an episode ends
+        assert "episodes.csv" in names, "no episode ended in the SMOKE run: make it longer"
     assert not any(".tmp" in name for name in names), names
     for picture in ("curve.png", "inside.png"):
         assert picture in names and not_blank(run / picture), picture

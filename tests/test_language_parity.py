@@ -350,14 +350,17 @@ def test_chinese_lines_wrap_by_columns_and_keep_punctuation_with_its_word():
 @pytest.mark.quick
 def test_a_copy_of_a_script_takes_the_chinese_lines_of_the_english_it_kept(tmp_path, monkeypatch):
     """A new script that no heading of locale/flags.zh-CN.md names (here a copy of
-    ppo_cartpole.py on another env) gets a flag's Chinese line where its English help and
-    default are a named script's; where they are its own (the env), none: a line from
-    another script's flag would say something else (FLAGS_ZH in the script gives it one)."""
+    ppo_cartpole.py on another env, and with its own words for --gamma) gets a flag's Chinese
+    line where its English help is a named script's (the env's default changed, its help did
+    not); where the help is its own, none: a line written for other words would say something
+    else (FLAGS_ZH in the script gives it one)."""
     import sys
 
     source = (ROOT / "ppo_cartpole.py").read_text(encoding="utf-8")
     changed = source.replace('env_id: str = "CartPole-v1"', 'env_id: str = "Acrobot-v1"')
-    assert changed != source
+    gamma = re.search(r'    gamma: float = .*\n    """(.*)"""', changed)[1]
+    changed = changed.replace(gamma, "the discount factor of Acrobot's returns")
+    assert changed.count("Acrobot") == 2
     (tmp_path / "ppo_copy.py").write_text(changed, encoding="utf-8")
     monkeypatch.syspath_prepend(str(tmp_path))
     try:
@@ -365,6 +368,6 @@ def test_a_copy_of_a_script_takes_the_chinese_lines_of_the_english_it_kept(tmp_p
     finally:
         sys.modules.pop("ppo_copy", None)
     original = help_zh.flags("ppo_cartpole")
-    for field in ("gamma", "hidden", "seed", "eval_episodes", "clip_coef", "solved_window"):
+    for field in ("env_id", "hidden", "seed", "eval_episodes", "clip_coef", "solved_window"):
         assert copy[field] == original[field], field
-    assert "env_id" not in copy
+    assert "gamma" not in copy

@@ -333,8 +333,10 @@ def test_histograms_of_the_updates_that_keep_the_array():
         assert [line.get_xdata()[0] for line in ax.lines] == [0.8, 1.2]
     none = drawn(plots.histograms("ratio", band=(0.8, 1.2)), dict(kept=kept[:2], labels={}))
     assert all(not ax.patches for ax in none)  # a run stopped before any: blank, no error
-    with pytest.raises(KeyError, match="'ratios', which no update kept .kept: .'ratio'.."):
+    with pytest.raises(KeyError, match=r"\['ratios'\], which no update kept .kept: .'ratio'.."):
         drawn(plots.histograms("ratios"), dict(kept=kept, labels={}))  # a wrong name
+    with pytest.raises(KeyError, match=r"\['value'\], which no update kept"):
+        drawn(plots.scatters("ratio", "value", "x", "y"), dict(kept=kept, labels={}))
 
 
 @pytest.mark.quick

@@ -82,7 +82,7 @@ def test_no_tool_names_a_script_an_env_or_what_only_one_script_has():
     """The tools take data and functions from the scripts: no script's name, no env id, no
     field of one script's Config read as cfg.<field>, no column that only one script logs."""
     fields, columns = script_only("fields"), script_only("columns")
-    assert "d_targ" in fields and "explained_var" in columns  # the check sees them
+    assert fields and columns  # the check sees some (unnamed: a new script may share one)
     for tool in TOOLS:
         attributes, strings, text = words(tool)
         named = [s for s in SCRIPTS if re.search(rf"\b{s}\b", text)]

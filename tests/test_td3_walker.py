@@ -63,7 +63,7 @@ def test_the_diff_from_ddpg_is_the_three_fixes_and_little_else():
     removed = [d for d in diff if d.startswith("-") and not d.startswith("---")]
     added = [d for d in diff if d.startswith("+") and not d.startswith("+++")]
     assert len(removed) <= 90 and len(added) <= 90, (len(removed), len(added))
-    for name, lines, budget in (("td3_walker", td3_lines, 372), ("ddpg_walker", ddpg_lines, 338)):
+    for name, lines, budget in (("td3_walker", td3_lines, 400), ("ddpg_walker", ddpg_lines, 350)):
         assert len(lines) <= budget, f"{name}.py has {len(lines)} lines, over its {budget}"
 
 
