@@ -1,5 +1,5 @@
-"""The guides' code references, `file.py:LINE` `name` (README.zh-CN.md, docs/ppo_to_grpo*.md),
-kept true by a program: each
+"""The guides' code references, `file.py:LINE` `name` (README.zh-CN.md, docs/ppo_to_grpo*.md,
+docs/ppo_to_rlhf*.md), kept true by a program: each
 LINE is made the line of `name` in that file nearest to the LINE written, so an edit that
 moves a script's lines moves its references with it. A name written as a call, `name(`, is
 a call: never the line that defines it.
