@@ -157,10 +157,10 @@ def parse_config(cls, argv=None, description=None):
         parser.add_argument(flag, default=argparse.SUPPRESS if hidden else f.default, **how,
                             help=argparse.SUPPRESS if hidden else text)
     args, unknown = parser.parse_known_args(argv)
-    if unknown:  # a mistyped flag: the nearest known one, if any is near
+    if unknown:  # a mistyped flag: the nearest known one, if any is near (0.7: --resume is
         flags = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
-        near = difflib.get_close_matches(next((u.split("=")[0] for u in unknown
-                                               if u.startswith("--")), ""), flags, n=1)
+        near = difflib.get_close_matches(next((u.split("=")[0] for u in unknown  # not --curves)
+                                               if u.startswith("--")), ""), flags, n=1, cutoff=0.7)
         parser.error(f"unrecognized arguments: {' '.join(unknown)}"
                      + (f" (did you mean {near[0]}?)" if near else ""))
     for name in [name for name in unused if name in vars(args)][:1]:  # given anyway

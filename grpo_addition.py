@@ -96,8 +96,8 @@ class TinyGPT(nn.Module):
 @dataclass
 class Config(cli.OutputFlags):
     """The task's and the algorithm's settings; the shared flags come from cli.OutputFlags."""
-    UNUSED_FLAGS = dict.fromkeys(("gifs", "eval_episodes", "watch", "gif", "cuda"),
-                                 "no env to play (--eval prints the answers), no GPU code here")
+    UNUSED_FLAGS = dict(dict.fromkeys(("gifs", "eval_episodes", "watch", "gif"), "no env to play"
+                                      " (--eval prints the answers)"), cuda="no GPU code here")
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 3

@@ -14,7 +14,7 @@ import textwrap
 from pathlib import Path
 
 HELP_ZH = Path(__file__).resolve().parent / "locale" / "flags.zh-CN.md"
-HINT = "--help-zh: 每个参数下面加一行中文说明"  # the last line of every --help
+HINT = "--help-zh: a Chinese line under each flag (每个参数下面加一行中文说明)"  # --help ends so
 
 
 def wanted(argv):

@@ -206,7 +206,8 @@ def play(cfg, path, env_id, ways, gif=GIF, watch=None):
         ret = common.record_gif(env_id, act_of(cfg.eval_seed), cfg.gif, cfg.eval_seed, **gif)
         print(f"{cfg.gif}: one episode, return {ret:.1f}", flush=True)
         return [ret]
-    print(f"playing {cfg.eval_episodes} episodes of {env_id} with {path}"
+    print(f"playing {cfg.eval_episodes} episode{'s' * (cfg.eval_episodes != 1)} of {env_id} "
+          f"with {path}"
           + ("; Ctrl-C stops" if cfg.watch else ""), flush=True)
     first = None
     for i, (_, what, act_of) in enumerate(ways):

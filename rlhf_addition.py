@@ -59,8 +59,9 @@ def with_scalar_head(model, d_model, zero=False):
 
 @dataclass
 class Config(cli.OutputFlags):
-    UNUSED_FLAGS = dict.fromkeys(("gifs", "eval_episodes", "watch", "gif", "cuda", "tensorboard"),
-                                 "no env to play, no GPU code, no TensorBoard logs here")
+    UNUSED_FLAGS = dict(dict.fromkeys(("gifs", "eval_episodes", "watch", "gif"), "no env to play "
+                                      "(--eval prints the answers)"), cuda="no GPU code here",
+                        tensorboard="no TensorBoard logs here")
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
     digits: int = 2

@@ -19,7 +19,7 @@ import common
 import runlog
 import cartpole_env
 from common import UserError
-from conftest import run_script
+from conftest import run_main, run_script
 
 
 def a_run(tmp_path, threshold, logged=None, **flags):
@@ -542,3 +542,14 @@ def test_an_evaluations_numpy_or_tensor_number_is_kept_as_a_plain_one(tmp_path, 
     loaded = checkpoints.load_checkpoint(tmp_path / "c.pt")["log"]["evaluations"][0]
     assert (loaded["length"], loaded["q"]) == (3.5, 0.5)
     assert (run.dir / "evaluations.csv").read_text().splitlines()[1].endswith(",3.5,0.5")
+
+
+@pytest.mark.quick
+def test_a_flag_this_script_lacks_gets_no_far_fetched_suggestion(capsys):
+    """--resume on a script without it (another script's flag) is named as unrecognized, with
+    no "did you mean --curves?"; a typo still gets its flag."""
+    p = run_main("ppo_cartpole.py", "--resume", "runs/latest", capsys=capsys)
+    assert p.returncode == 2 and "unrecognized arguments: --resume runs/latest" in p.stderr
+    assert "did you mean" not in p.stderr, p.stderr
+    p = run_main("ppo_cartpole.py", "--lerning-rate", "1e-3", capsys=capsys)
+    assert p.returncode == 2 and "(did you mean --learning-rate?)" in p.stderr, p.stderr
