@@ -51,19 +51,21 @@ def append_csv(path, row):
 
 def stop_if_diverged(step, losses, nets, run_dir=None, outputs=()):
     """nan or inf in `losses` (name -> number), in the weights of `nets` or in `outputs` (the
-    networks' outputs on the next states): remove `run_dir`, raise one UserError naming the
-    step and the likely cause."""
+    networks' outputs on the next states): remove `run_dir` (unless it holds a checkpoint.pt,
+    the last good state to --resume from), raise one UserError naming the step and the likely
+    cause."""
     bad = [name for name, value in losses.items()  # None: not measured; arrays: for pictures
            if value is not None and np.ndim(value) == 0 and not np.isfinite(float(value))]
     bad += [f"{type(net).__name__}'s weights" for net in nets
             if not all(bool(p.isfinite().all()) for p in net.parameters())]
     bad += ["the networks' output"] * (not all(bool(out.isfinite().all()) for out in outputs))
     if bad:
-        if run_dir is not None:
+        removed = run_dir is not None and not (Path(run_dir) / "checkpoint.pt").exists()
+        if removed:
             shutil.rmtree(run_dir, ignore_errors=True)
         raise UserError(f"training diverged at step {step}: nan or inf in {', '.join(bad)}; "
                         "likely cause: too high a learning rate (try a smaller one)"
-                        + (f"; {run_dir} was removed" if run_dir is not None else ""))
+                        + (f"; {run_dir} was removed" if removed else ""))
 
 
 def hours_minutes(seconds):
@@ -250,9 +252,8 @@ class EvaluationLog:
             self.timer.setdefault("learning_since", (step, time.time()))
         line = step % self.cfg.print_every == 0
         if losses is not None:
-            checkpointed = (self.dir / "checkpoint.pt").exists()
-            modules = [net for net in nets if line and isinstance(net, torch.nn.Module)]
-            stop_if_diverged(step, losses, modules, None if checkpointed else self.dir)
+            modules = [net for net in nets if isinstance(net, torch.nn.Module)] if line else ()
+            stop_if_diverged(step, losses, modules, self.dir)
         if not line:
             return
         now, cfg, timer = time.time(), self.cfg, self.timer

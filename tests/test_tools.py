@@ -368,6 +368,11 @@ def test_stop_if_diverged(tmp_path):
                                                r"too high a learning rate .*run was removed"):
         runlog.stop_if_diverged(7, dict(loss_pi=0.1, loss_v=float("inf")), [net], run)
     assert not run.exists()
+    run.mkdir()
+    (run / "checkpoint.pt").touch()  # a run that can --resume from its last good state: kept
+    with pytest.raises(UserError, match=r"at step 7: nan or inf in loss_v; .*smaller one\)$"):
+        runlog.stop_if_diverged(7, dict(loss_v=float("nan")), [net], run)
+    assert (run / "checkpoint.pt").exists()
     with torch.no_grad():
         net.weight[0, 0] = 1e38  # finite weights, an output of inf
         out = net(torch.tensor([[10., 0.]]))
