@@ -135,9 +135,7 @@ def parse_config(cls, argv=None, description=None):
                                      formatter_class=help_zh.HelpFormatterZh if zh
                                      else help_zh.HelpFormatter)
     parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage
-    docs = {}
-    for klass in reversed(cls.__mro__[:-1]):  # the string under each field; subclasses win
-        docs.update(help_zh.field_docs(klass))
+    docs = help_zh.english(cls)  # the string under each field, its bases' too
     # UNUSED_FLAGS: {shared field: why this script has no use for it}: out of --help, refused
     own, unused = vars(cls).get("__annotations__", {}), getattr(cls, "UNUSED_FLAGS", {})
     for f in sorted(dataclasses.fields(cls), key=lambda f: f.name not in own):
@@ -157,14 +155,16 @@ def parse_config(cls, argv=None, description=None):
         parser.add_argument(flag, default=argparse.SUPPRESS if hidden else f.default, **how,
                             help=argparse.SUPPRESS if hidden else text)
     args, unknown = parser.parse_known_args(argv)
-    if unknown:  # a mistyped flag: the nearest known one, if any is near (0.7: --resume is
+    if unknown:  # a mistyped flag: the nearest known one, if any is near (cutoff 0.7: a flag
+        # of another script, --resume, is not offered --curves)
         flags = [o for a in parser._actions for o in a.option_strings if o.startswith("--")]
-        near = difflib.get_close_matches(next((u.split("=")[0] for u in unknown  # not --curves)
+        near = difflib.get_close_matches(next((u.split("=")[0] for u in unknown
                                                if u.startswith("--")), ""), flags, n=1, cutoff=0.7)
         parser.error(f"unrecognized arguments: {' '.join(unknown)}"
                      + (f" (did you mean {near[0]}?)" if near else ""))
-    for name in [name for name in unused if name in vars(args)][:1]:  # given anyway
-        parser.error(f"--{name.replace('_', '-')}: {unused[name]}")
+    given = [name for name in unused if name in vars(args)]  # unused, given anyway: refused
+    if given:
+        parser.error(f"--{given[0].replace('_', '-')}: {unused[given[0]]}")
     for name, value in vars(args).items():  # nan fails every test, inf never ends: refuse both
         if isinstance(value, float) and not np.isfinite(value):
             parser.error(f"--{name.replace('_', '-')} must be a finite number, got {value}")

@@ -278,16 +278,11 @@ def test_one_glossary_for_every_chinese_text():
 def shown_flags(script):
     """{field: English help} of the flags `python script --help` shows."""
     module = importlib.import_module(script[:-3])
-    docs = {}
-    for klass in reversed(module.Config.__mro__[:-1]):
-        docs.update(cli_docs(klass))
+    docs = help_zh.english(module.Config)
     unused = getattr(module.Config, "UNUSED_FLAGS", ())
     return {f.name: f"{docs.get(f.name, '')} {f.default}" for f in dataclasses.fields(module.Config)
             if f.name not in unused}
 
-
-def cli_docs(klass):
-    return help_zh.field_docs(klass)
 
 
 @pytest.mark.parametrize("script", training_scripts())
