@@ -40,16 +40,21 @@ def flags(script, module=None):
     own (a Chinese line translates an English one), the nearest such script first (the one
     with the most flags like it); the script's own FLAGS_ZH ({field: line}, if it has one: a
     new script needs no other file) wins over them all."""
-    sections = []
+    sections = []  # (the scripts a heading names, {field: Chinese line}), HELP_ZH read once
     for line in HELP_ZH.read_text(encoding="utf-8").splitlines():
         if line.startswith("## "):
             sections.append((re.findall(r"`(\w+)\.py`", line), {}))
         elif sections and (row := re.match(r"\| `--([\w-]+)` \| (.+) \|$", line)):
             sections[-1][1][row[1].replace("-", "_")] = row[2]
-    found = {}
-    for names, rows in sorted(sections, key=lambda s: (bool(s[0]), -len(s[0]))):
-        if not names or script in names:
-            found.update(rows)
+
+    def listed(name):  # the lines of the sections naming `name`, and 所有脚本's
+        lines = {}
+        for names, rows in sorted(sections, key=lambda s: (bool(s[0]), -len(s[0]))):
+            if not names or name in names:
+                lines.update(rows)
+        return lines
+
+    found = listed(script)
     module = module or importlib.import_module(script)  # a script run as __main__: given
     named = {name for names, _ in sections for name in names}
     if script not in named:
@@ -57,7 +62,7 @@ def flags(script, module=None):
         theirs = {name: english(importlib.import_module(name).Config) for name in sorted(named)}
         alike = {name: {f for f, e in mine.items() if theirs[name].get(f) == e} for name in theirs}
         for name in sorted(theirs, key=lambda name: len(alike[name])):  # the nearest last: wins
-            found.update({f: line for f, line in flags(name).items() if f in alike[name]})
+            found.update({f: line for f, line in listed(name).items() if f in alike[name]})
     return {**found, **getattr(module, "FLAGS_ZH", {})}
 
 
