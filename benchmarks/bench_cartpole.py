@@ -12,6 +12,8 @@ that drift of the machine hits every runner alike.
     pip install -r benchmarks/requirements.txt     # adds stable-baselines3
     python benchmarks/bench_cartpole.py ppo_cartpole sb3_ppo
     python benchmarks/bench_cartpole.py --all       # every runner below, seeds 0-9
+    python benchmarks/bench_cartpole.py reinforce_cartpole reinforce_no_baseline \
+        actor_critic_cartpole ppo_cartpole --seeds 5 --out benchmarks/results/reinforce_cartpole.json
 
 The targets the project holds itself to are checked at the end and printed as
 PASS/FAIL lines; results are also written as JSON to benchmarks/results/.
@@ -30,6 +32,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 PY = sys.executable
+REINFORCE = ["--episodes-per-update", "4", "--learning-rate", "0.01", "--vf-learning-rate", "0.01",
+             "--gamma", "0.99", "--hidden", "128"]
 # Each runner: the command for one seed. Our scripts skip the GIFs and the curve and evaluate
 # one episode: all of it comes after the solved line and never counts in the timing.
 RUNNERS = {
@@ -39,11 +43,20 @@ RUNNERS = {
                                           "--no-gifs", "--no-curves", "--eval-episodes", "1"],
     "actor_critic_cartpole": lambda seed, out: [PY, str(ROOT / "actor_critic_cartpole.py"), "--seed", str(seed),
                                                 "--run-dir", out, "--no-gifs", "--no-curves", "--eval-episodes", "1"],
+    # REINFORCE's defaults written out (one env, 4 whole episodes a step, Adam 0.01 for pi and
+    # V, gamma 0.99, 128 units), so that the record does not lean on them
+    "reinforce_cartpole": lambda seed, out: [PY, str(ROOT / "reinforce_cartpole.py"), "--seed", str(seed),
+                                             "--run-dir", out, "--no-gifs", "--no-curves", "--eval-episodes", "1",
+                                             *REINFORCE, "--baseline"],
+    "reinforce_no_baseline": lambda seed, out: [PY, str(ROOT / "reinforce_cartpole.py"), "--seed", str(seed),
+                                                "--run-dir", out, "--no-gifs", "--no-curves", "--eval-episodes",
+                                                "1", *REINFORCE, "--no-baseline"],
     "episodic_ac": lambda seed, out: [PY, str(ROOT / "benchmarks" / "episodic_ac_cartpole.py"), "--seed", str(seed)],
     "sb3_ppo": lambda seed, out: [PY, str(ROOT / "benchmarks" / "sb3_cartpole.py"), "--algo", "ppo", "--seed", str(seed)],
     "sb3_a2c": lambda seed, out: [PY, str(ROOT / "benchmarks" / "sb3_cartpole.py"), "--algo", "a2c", "--seed", str(seed)],
 }
-OURS = ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
+OURS = ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole", "reinforce_cartpole",
+        "reinforce_no_baseline")
 # The targets: (runner, what, limit, relative to). Seconds include torch.optim's one-time
 # import of torch._dynamo on the first Adam (1-2 s here), which SB3 pays too.
 TARGETS = [
@@ -56,6 +69,8 @@ TARGETS = [
     ("actor_critic_cartpole", "median_steps", 40_000, None),
     ("actor_critic_cartpole", "median_seconds", 0.6, "sb3_a2c"),
     ("actor_critic_cartpole", "median_seconds", 1.0, "episodic_ac"),
+    ("reinforce_cartpole", "solved", 10, None),
+    ("reinforce_no_baseline", "solved", 10, None),
 ]
 SOLVED = re.compile(r"^solved: .* at step (\d+)")
 
@@ -97,7 +112,26 @@ def summarize(runs):
     )
 
 
+def table(path):
+    """The rows a results page shows of a committed record (`--table FILE`): per runner, the
+    seeds solved, the steps and the seconds to solve as median [min, max]."""
+    runs = json.loads((ROOT / path).read_text())["runs"]
+    rows = ["| runner | solved | steps to solve, median [min, max] | seconds, median [min, max] |",
+            "|---|---|---|---|"]
+    for name, seeds in runs.items():
+        done = [r for r in seeds if r["steps"] is not None]
+        steps, secs = [r["steps"] for r in done], [r["seconds"] for r in done]
+        rows.append(f"| {name} | {len(done)}/{len(seeds)} | {statistics.median(steps):,.0f} "
+                    f"[{min(steps):,}, {max(steps):,}] | {statistics.median(secs):.1f} "
+                    f"[{min(secs):.1f}, {max(secs):.1f}] |" if done else
+                    f"| {name} | 0/{len(seeds)} | - | - |")
+    return rows
+
+
 def main():
+    if sys.argv[1:2] == ["--table"]:  # python benchmarks/bench_cartpole.py --table FILE
+        print("\n".join(table(sys.argv[2])))
+        return
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("runners", nargs="*", choices=[[]] + sorted(RUNNERS), help="which runners (default: --all)")
     parser.add_argument("--all", action="store_true", help="every runner")
