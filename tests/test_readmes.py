@@ -336,3 +336,17 @@ def test_results_dqn_figures_come_from_the_committed_records(path, heading):
     if path == RESULTS:  # the summary in English; the Chinese page says it in Chinese
         for summary in [line for line in printed if not line.startswith("|")]:
             assert summary in " ".join(section.split()), f"docs/results.md lacks {summary!r}"
+
+
+@pytest.mark.parametrize("path", [RESULTS, ROOT / "docs" / "results.zh-CN.md"])
+def test_results_reinforce_table_comes_from_the_committed_record(path):
+    """The REINFORCE table on each results page (seeds 0-4 beside A2C and PPO) is what
+    `bench_cartpole.py --table` prints from benchmarks/results/reinforce_cartpole.json."""
+    spec = importlib.util.spec_from_file_location("bench_cartpole",
+                                                  ROOT / "benchmarks" / "bench_cartpole.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    rows = bench.table("benchmarks/results/reinforce_cartpole.json")
+    for row in rows[2:] if path != RESULTS else rows:  # the Chinese page: its own header
+        assert row in lines, f"{path.name} lacks the REINFORCE table row {row!r}"
