@@ -22,6 +22,7 @@ import critic_output_shape  # noqa: E402
 import gae_lambda  # noqa: E402
 import lab  # noqa: E402
 import reinforce_baseline  # noqa: E402
+import sarsa_vs_q_learning  # noqa: E402
 import sac_temperature  # noqa: E402
 import double_dqn  # noqa: E402
 import dqn_target_period  # noqa: E402
@@ -33,7 +34,7 @@ import truncation_as_termination_ddpg  # noqa: E402
 EXPERIMENTS = ("truncation_as_termination", "autoreset_not_masked", "advantage_normalization",
                "gae_lambda", "critic_output_shape", "truncation_as_termination_ddpg",
                "clip_or_penalty", "target_networks", "double_dqn", "dqn_target_period",
-               "reinforce_baseline")
+               "reinforce_baseline", "sarsa_vs_q_learning")
 
 
 def rollout(truncate_at=None):
