@@ -1204,6 +1204,368 @@ def check_dqn_target(fn):
             raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}") from None
 
 
+# ---- REINFORCE (reinforce_cartpole.py): the reward-to-go, and the loss with its baseline
+
+
+def reward_to_go_cases():
+    # (what, (rewards, gamma, last_value), G by hand); rewards as train() passes them, a tuple
+    return [
+        (tr("terminated after 3 steps (last_value = 0), gamma = 0.5: G_2 = 3, G_1 = 2 + 0.5 * 3, "
+            "G_0 = 1 + 0.5 * 3.5", "3 步后终止（last_value = 0），gamma = 0.5：G_2 = 3，"
+            "G_1 = 2 + 0.5 * 3，G_0 = 1 + 0.5 * 3.5"), ((1.0, 2.0, 3.0), 0.5, 0.0),
+         (2.75, 3.5, 3.0)),
+        (tr("the same rewards cut by a time limit, last_value = V(s_T) = 4: G_2 = 3 + 0.5 * 4",
+            "同样的奖励，被时间截断，last_value = V(s_T) = 4：G_2 = 3 + 0.5 * 4"),
+         ((1.0, 2.0, 3.0), 0.5, 4.0), (3.25, 4.5, 5.0)),
+        (tr("terminated after 4 steps, gamma = 0.9: G_3 = 1, G_2 = -1 + 0.9, G_1 = 0 + 0.9 * G_2, "
+            "G_0 = 2 + 0.9 * G_1", "4 步后终止，gamma = 0.9：G_3 = 1，G_2 = -1 + 0.9，"
+            "G_1 = 0 + 0.9 * G_2，G_0 = 2 + 0.9 * G_1"), ((2.0, 0.0, -1.0, 1.0), 0.9, 0.0),
+         (1.919, -0.09, -0.1, 1.0)),
+        (tr("one step, cut by a time limit: G_0 = 5 + 0.5 * 2", "只有一步，被时间截断：G_0 = 5 + 0.5 * 2"),
+         ((5.0,), 0.5, 2.0), (6.0,)),
+    ]
+
+
+def reward_to_go_mistakes(rewards, gamma, last_value):
+    """(label, G as the mistake computes it) for each known mistake."""
+    r, T = list(rewards), len(rewards)
+
+    def back(step, start):  # G = step(r_t, G) from G_T = start, t = T - 1 down to 0
+        out, G = [0.0] * T, start
+        for i in reversed(range(T)):
+            out[i] = G = step(r[i], G)
+        return out
+    right = back(lambda x, G: x + gamma * G, last_value)
+    forward, G = [], 0.0
+    for x in r:
+        G = x + gamma * G
+        forward.append(G)
+    return [
+        (tr("the whole episode's return G_0 for every step: each action is weighted by rewards "
+            "that came before it too\n    (the reward-to-go G_t starts at t: an action cannot "
+            "change what came before it)", "每一步都用了整个回合的回报 G_0：每个动作也被它之前的"
+            "奖励加了权\n    （回报 G_t 从 t 开始算：动作改变不了它之前的奖励）"), [right[0]] * T),
+        (tr("the sum run forward, G_t = r_t + gamma * G_{t-1}: the rewards before t counted, those "
+            "after it left out;\n    go backwards, from t = T - 1 down to 0",
+            "累加的方向反了，写成了 G_t = r_t + gamma * G_{t-1}：算进了 t 之前的奖励，漏了 t 之后的；"
+            "\n    要从 t = T - 1 往回算到 0"), forward),
+        (tr("a running sum from the episode's start, sum_{k <= t} gamma^k r_k: the rewards before "
+            "t counted, those after it left out", "从回合开始累加，即 sum_{k <= t} gamma^k r_k："
+            "算进了 t 之前的奖励，漏了 t 之后的"),
+         [sum(gamma ** k * r[k] for k in range(i + 1)) for i in range(T)]),
+        (tr("gamma^k counted from the episode's start, sum_{k >= t} gamma^k r_k: r_k's discount "
+            "is gamma^(k - t),\n    by how far after t it came (G_t = r_t + gamma * G_{t+1} gives "
+            "it)", "gamma 的指数从回合开始数，即 sum_{k >= t} gamma^k r_k：r_k 的折扣是 "
+            "gamma^(k - t)，\n    按它离 t 多远算（G_t = r_t + gamma * G_{t+1} 自然就是这样）"),
+         [sum(gamma ** k * r[k] for k in range(i, T)) + gamma ** T * last_value
+          for i in range(T)]),
+        (tr("the reward itself discounted, G_t = gamma * (r_t + G_{t+1}): r_t comes at t, "
+            "undiscounted; only the future is, r_t + gamma * G_{t+1}",
+            "奖励本身也打了折，写成了 G_t = gamma * (r_t + G_{t+1})：r_t 就在 t 时刻拿到，"
+            "不打折；打折的只是未来，即 r_t + gamma * G_{t+1}"),
+         back(lambda x, G: gamma * (x + G), last_value)),
+        (tr("gamma left out: G_t = r_t + G_{t+1}", "漏了 gamma：写成了 G_t = r_t + G_{t+1}"),
+         back(lambda x, G: x + G, last_value)),
+        (tr("last_value ignored: the sum starts from 0, where a time limit cut the episode and "
+            "G_T = last_value = V(s_T)\n    (the episode did not end: its tail is the critic's "
+            "guess)", "忽略了 last_value：从 0 开始累加，可回合是被时间截断的，G_T = last_value = "
+            "V(s_T)\n    （回合没有真正结束：剩下的部分用 V 估计）"),
+         back(lambda x, G: x + gamma * G, 0.0)),
+        (tr("last_value not discounted: G_{T-1} = r_{T-1} + last_value, where last_value is "
+            "G_T, one step later:\n    r_{T-1} + gamma * last_value",
+            "last_value 没有打折：写成了 G_{T-1} = r_{T-1} + last_value；last_value 是晚一步的 "
+            "G_T，\n    应该是 r_{T-1} + gamma * last_value"),
+         [g + gamma ** (T - 1 - i) * last_value
+          for i, g in enumerate(back(lambda x, G: x + gamma * G, 0.0))]),
+        (tr("the returns in reverse order: appended in the backward loop and not turned round "
+            "(returns[T - 1 - t] holds G_t)", "回报的顺序反了：在往回的循环里 append，最后没有"
+            "倒过来（returns[T - 1 - t] 里放的是 G_t）"), right[::-1])]
+
+
+def check_reward_to_go(fn):
+    for what, (rewards, gamma, last_value), expected in reward_to_go_cases():
+        got = fn(rewards, gamma, last_value)
+        values = as_list(got)
+        inputs = (tr("\n  input: ", "\n  输入：")
+                  + f"rewards={rewards}, gamma={gamma}, last_value={last_value}")
+        try:
+            if values is None or np.ndim(values) != 1:
+                raise Failed(tr(f"expected an array of {len(rewards)} numbers (one G_t per step), "
+                                f"got {type(got).__name__} {got!r}",
+                                f"应该返回 {len(rewards)} 个数的数组（每一步一个 G_t），得到的是 "
+                                f"{type(got).__name__} {got!r}"))
+            compare("G", torch.tensor(values, dtype=torch.float64), t(*expected))
+        except Failed as e:
+            named = [label for label, value in reward_to_go_mistakes(rewards, gamma, last_value)
+                     if values is not None and np.shape(values) == np.shape(value)
+                     and np.allclose(values, value, atol=1e-5)]
+            raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {e}" + (tr(
+                "\n  this is exactly what this mistake gives: ",
+                "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None
+
+
+def reinforce_case(baseline):
+    """pi(.|s) = (0.5, 0.5), (0.25, 0.75), (0.8, 0.2), the actions 0, 1, 1: log pi(a|s) = ln 0.5,
+    ln 0.75, ln 0.2 (no two alike); G = (3, 2, 1), V = (1, 2.5, 0.5): G - V = (2, -0.5, 0.5)."""
+    policy = Fixed(torch.log(t([0.5, 0.5], [0.25, 0.75], [0.8, 0.2])), names=logits_names())
+    value_net = Fixed(t(1.0, 2.5, 0.5), names=(tr("V(s)", "V(s)"),))
+    data = dict(obs=torch.zeros(3, 4), act=torch.tensor([0, 1, 1]), ret=t(3.0, 2.0, 1.0))
+    return policy, value_net, data, baseline
+
+
+def reinforce_by_hand(baseline, weights=None, reduce=None, probs=False, v_scale=0.5, v_sum=False):
+    """(loss_pi, loss_v, weights) of reinforce_case in plain Python (and the mistakes')."""
+    G, V = (3.0, 2.0, 1.0), (1.0, 2.5, 0.5)
+    pi = (0.5, 0.75, 0.2)  # pi(a_t|s_t) of the actions taken
+    w = weights or ([g - v for g, v in zip(G, V)] if baseline else list(G))
+    terms = [(p if probs else math.log(p)) * x for p, x in zip(pi, w)]
+    loss_pi = -sum(terms) / (1 if reduce == "sum" else 3)
+    squares = [(v - g) ** 2 for v, g in zip(V, G)]
+    loss_v = v_scale * sum(squares) / (1 if v_sum else 3)
+    return scalar(loss_pi), scalar(loss_v), t(*w)
+
+
+def reinforce_cases():
+    return [
+        (tr("baseline = False: the weights are G = (3, 2, 1); pi(a|s) = 0.5, 0.75, 0.2; "
+            "V = (1, 2.5, 0.5)", "baseline = False：权重就是 G = (3, 2, 1)；pi(a|s) = 0.5、0.75、0.2；"
+            "V = (1, 2.5, 0.5)"), reinforce_case(False), reinforce_by_hand(False)),
+        (tr("baseline = True: the weights are G - V = (2, -0.5, 0.5), the same batch",
+            "baseline = True：权重是 G - V = (2, -0.5, 0.5)，同一批数据"), reinforce_case(True),
+         reinforce_by_hand(True)),
+    ]
+
+
+def reinforce_mistakes(policy, value_net, data, baseline):
+    G, V = [3.0, 2.0, 1.0], [1.0, 2.5, 0.5]
+    right = reinforce_by_hand(baseline)
+    w = right[2].tolist()
+    mean = sum(w) / 3
+    std = math.sqrt(sum((x - mean) ** 2 for x in w) / 2)
+    return [
+        (tr("the sign: +mean(log pi * weights) where the loss is its negative (descending it "
+            "would make the actions taken\n    less likely the better they did)",
+            "符号反了：损失应该是 -mean(log π * 权重)（对正号的那个做梯度下降，动作做得越好，"
+            "\n    反而越不可能再被选中）"), (-right[0], right[1], right[2])),
+        (tr("a sum over the batch (.sum()) where the script takes the mean (.mean()): the step "
+            "then grows with the batch's length\n    (longer episodes, bigger steps, at the same "
+            "step size)", "对这批数据求了和（.sum()），脚本求的是均值（.mean()）：这样每一步的大小"
+            "会随这批数据的长度变大\n    （回合越长，步子越大，学习率却没变）"),
+         reinforce_by_hand(baseline, reduce="sum")),
+        (tr("the baseline added, G + V, where it is subtracted: G - V(s_t)",
+            "基线加上去了，写成了 G + V；应该减去：G - V(s_t)"),
+         reinforce_by_hand(baseline, weights=[g + v for g, v in zip(G, V)]) if baseline
+         else None),
+        (tr("the weight the other way round, V(s_t) - G_t: G_t - V(s_t) says how much better "
+            "than expected the return was", "权重反过来了，写成了 V(s_t) - G_t：G_t - V(s_t) "
+            "说的是回报比预期好多少"),
+         reinforce_by_hand(baseline, weights=[v - g for g, v in zip(G, V)]) if baseline
+         else None),
+        (tr("baseline ignored: the weights are G_t alone where baseline = True asks for "
+            "G_t - V(s_t)", "忽略了 baseline：baseline = True 时权重应该是 G_t - V(s_t)，"
+            "你用的只是 G_t"), reinforce_by_hand(baseline, weights=G) if baseline else None),
+        (tr("baseline ignored: G_t - V(s_t) where baseline = False (--no-baseline) asks for "
+            "G_t alone", "忽略了 baseline：baseline = False（--no-baseline）时权重就是 G_t，"
+            "你减去了 V(s_t)"),
+         None if baseline else reinforce_by_hand(baseline, weights=[g - v for g, v in zip(G, V)])),
+        (tr("the weights normalized, (w - mean) / std, as PPO's advantages are: this script "
+            "uses them as they are", "把权重归一化了，(w - mean) / std，像 PPO 的优势那样："
+            "这个脚本直接用它们"),
+         reinforce_by_hand(baseline, weights=[(x - mean) / (std + 1e-8) for x in w])),
+        (tr("pi(a|s) where log pi(a|s) belongs (the probability, not its log: dist.log_prob)",
+            "用了 π(a|s)，应该是 log π(a|s)（用概率代替了它的对数：要用 dist.log_prob）"),
+         reinforce_by_hand(baseline, probs=True)),
+        (tr("the baseline's loss not halved: 0.5 * mean((V - G)^2)",
+            "基线的损失没有乘 0.5：应该是 0.5 * mean((V - G)^2)"),
+         reinforce_by_hand(baseline, v_scale=1.0)),
+        (tr("the baseline's loss summed over the batch (.sum()) where the script takes the mean",
+            "基线的损失对这批数据求了和（.sum()），脚本求的是均值"),
+         reinforce_by_hand(baseline, v_sum=True))]
+
+
+def reinforce_gradient_mistake(loss, kind):
+    """The mistake a gradient failure of `loss` ("loss_pi" or "loss_v") shows, or ''."""
+    if loss == "loss_pi" and kind == "stray":
+        return tr("V(s_t) not detached in the weight G_t - V(s_t): pi's loss then trains V too "
+                  "(toward making G_t - V(s_t) large,\n    not toward G_t), beside loss_v: "
+                  "values.detach() in the weight, values as they are in loss_v",
+                  "权重 G_t - V(s_t) 里的 V(s_t) 没有 detach：这样 π 的损失也会训练 V（把 G_t - V(s_t) "
+                  "往大里推，\n    而不是让 V 拟合 G_t），和 loss_v 一起：权重里用 values.detach()，"
+                  "loss_v 里用 values 本身")
+    if loss == "loss_pi" and kind == "cut":
+        return tr("log pi(a|s) computed without a gradient (torch.no_grad(), .detach() or "
+                  ".item()): pi would never move", "log π(a|s) 是在不带梯度的情况下算的"
+                  "（torch.no_grad()、.detach() 或 .item()）：π 永远不会变")
+    if loss == "loss_v" and kind == "cut":
+        return tr("V(s_t) detached in loss_v too: the baseline would never learn; detach it in "
+                  "pi's weight only", "loss_v 里的 V(s_t) 也 detach 了：基线永远学不到东西；"
+                  "只在 π 的权重里 detach")
+    return ""
+
+
+# ---- Tabular TD control (q_learning_cliffwalking.py): Sarsa's update and Q-learning's
+
+
+def tabular_table():
+    """Q of three states, four actions. In s' = 1 the best action is 1 (-1.5), the next action
+    taken is 2 (an exploring step, -20) and the action just taken, 0, is worth -3: a target
+    that values s' any other way than the right one gives another number. Row 2 holds the
+    table's largest value (2), for the case where s' = s (a step into a wall)."""
+    return np.array([[-2.0, -4.0, 0.5, -1.0], [-3.0, -1.5, -20.0, -6.0], [2.0, -5.0, -8.0, -7.0]])
+
+
+def tabular_cases(sarsa):
+    """(what, (s, a, r, s_next, a_next, terminated, alpha, gamma)); r and the states as the env
+    gives them (ints), terminated a Python bool."""
+    row = tr("Q(s', .) = (-3, -1.5, -20, -6): the best action 1 (-1.5), ",
+             "Q(s', .) = (-3, -1.5, -20, -6)：最好的动作是 1（-1.5），")
+    nxt = tr("the next action a' = 2 (an exploring step, -20); ",
+             "下一个动作 a' = 2（探索的一步，-20）；") if sarsa else ""
+    return [
+        (tr("s = 0, a = 0 (Q = -2), r = -1, s' = 1, not terminated; ", "s = 0，a = 0（Q = -2），"
+            "r = -1，s' = 1，没有终止；") + row + nxt
+         + tr("alpha = 0.25, gamma = 0.9", "alpha = 0.25，gamma = 0.9"),
+         (0, 0, -1, 1, 2, False, 0.25, 0.9)),
+        (tr("the same step, terminated (the goal): the target is r alone, whatever Q(s', .)",
+            "同样的一步，但终止了（到达终点）：目标只有 r，不管 Q(s', .) 是多少"),
+         (0, 0, -1, 1, 2, True, 0.25, 0.9)),
+        (tr("a step into a wall, s' = s = 2, a = 3 (Q = -7)", "撞墙的一步，s' = s = 2，a = 3（Q = -7）")
+         + (tr(", a' = 3 again", "，a' 还是 3") if sarsa else "")
+         + tr(": Q(s', .) = (2, -5, -8, -7); alpha = 0.5, gamma = 1",
+              "：Q(s', .) = (2, -5, -8, -7)；alpha = 0.5，gamma = 1"),
+         (2, 3, -1, 2, 3, False, 0.5, 1.0)),
+    ]
+
+
+def tabular_by_hand(Q, s, a, r, s_next, a_next, terminated, alpha, gamma, sarsa, value=None,
+               not_done=None, discount=None, step=None, sign=1.0):
+    """(Q[s, a] after the update, the TD error) in plain Python, and the mistakes' versions:
+    value, the value of s' used; not_done, the factor that cuts it; discount, gamma's place;
+    step, alpha's; sign, delta's."""
+    q = Q[s, a]
+    value = (Q[s_next, a_next] if sarsa else Q[s_next].max()) if value is None else value
+    not_done = (0.0 if terminated else 1.0) if not_done is None else not_done
+    target = r + (gamma if discount is None else discount) * not_done * value
+    delta = sign * (target - q)
+    return q + (alpha if step is None else step) * delta, delta
+
+
+def tabular_mistakes(Q, s, a, r, s_next, a_next, terminated, alpha, gamma, sarsa):
+    """(label, (Q[s, a] after, the TD error returned)) of each known mistake."""
+    case = (Q, s, a, r, s_next, a_next, terminated, alpha, gamma, sarsa)
+    q_new, delta = tabular_by_hand(*case)
+    target = delta + Q[s, a]
+    if sarsa:
+        values = [
+            (tr("max_a' Q(s', a') where Sarsa takes the next action a' (that is Q-learning's "
+                "target: Sarsa values s' by the action it will\n    really take there, "
+                "exploration included)", "用了 max_a' Q(s', a')，Sarsa 要的是下一个动作 a'（那是 "
+                "Q 学习的目标：Sarsa 按它在 s' 真的要做的动作估值，\n    探索的动作也算）"),
+             Q[s_next].max()),
+            (tr("Q(s', a), the action just taken, where Sarsa takes the next action a_next",
+                "用了 Q(s', a)，即刚做过的那个动作，Sarsa 要的是下一个动作 a_next"), Q[s_next, a])]
+    else:
+        values = [
+            (tr("Q(s', a), the action just taken valued at s', where Q-learning takes the best "
+                "action there, max_a' Q(s', a')\n    (Q-learning has no next action: whatever "
+                "the agent does next, the target takes the max)",
+                "用了 Q(s', a)，即把刚做过的动作放到 s' 去估值；Q 学习要的是那里最好的动作 "
+                "max_a' Q(s', a')\n    （Q 学习没有“下一个动作”：不管智能体接下来做什么，目标都取最大值）"),
+             Q[s_next, a]),
+            (tr("the mean over the actions of s', where Q-learning takes the max",
+                "对 s' 的各个动作取了平均，Q 学习要取最大值"), Q[s_next].mean()),
+            (tr("argmax (an action's index) where the max (its value) belongs: Q[s_next].max()",
+                "用了 argmax（动作的编号），应该用 max（它的价值）：Q[s_next].max()"),
+             float(np.argmax(Q[s_next]))),
+            (tr("the max at s, not at s' (Q[s].max())", "在 s 处取的最大值，应该在 s' 处（写成了 Q[s].max()）"),
+             Q[s].max()),
+            (tr("the max over the whole table (Q.max()), not over s_next's row",
+                "对整张表取了最大值（Q.max()），应该只在 s_next 这一行取"), Q.max())]
+    found = [(label, tabular_by_hand(*case, value=v)) for label, v in values]
+    found += [
+        (tr("a bootstrap at a termination: after the goal there is no s' to value, the target "
+            "is r alone ((1 - terminated))", "终止处还在自举：到达终点之后没有 s' 可估值，目标只有 r"
+            "（要乘 (1 - terminated)）"), tabular_by_hand(*case, not_done=1.0)),
+        (tr("~terminated on a Python bool: ~False is -1 and ~True is -2, not 1 and 0: use "
+            "(1 - terminated) or (not terminated)", "对 Python 的布尔值用了 ~terminated：~False 是 "
+            "-1，~True 是 -2，不是 1 和 0：要用 (1 - terminated) 或 (not terminated)"),
+         tabular_by_hand(*case, not_done=-2.0 if terminated else -1.0)),
+        (tr("gamma left out: r + Q(s', .) where the target is r + gamma * Q(s', .)",
+            "漏了 gamma：写成了 r + Q(s', .)，目标是 r + gamma * Q(s', .)"),
+         tabular_by_hand(*case, discount=1.0)),
+        (tr("alpha left out: Q[s, a] = target, a full replacement, where Q moves a step alpha "
+            "toward it (Q[s, a] += alpha * delta)", "漏了 alpha：Q[s, a] = 目标，整个换掉了；应该朝目标"
+            "走 alpha 那么大的一步（Q[s, a] += alpha * delta）"), tabular_by_hand(*case, step=1.0)),
+        (tr("the TD error's sign: delta = Q[s, a] - target, so Q moves away from the target "
+            "(delta = target - Q[s, a])", "TD 误差的符号反了：写成了 delta = Q[s, a] - 目标，Q 就"
+            "离目标越来越远（delta = 目标 - Q[s, a]）"), tabular_by_hand(*case, sign=-1.0)),
+        (tr("the TD error returned with its sign flipped (Q[s, a] - target); the update itself "
+            "is right", "返回的 TD 误差符号反了（Q[s, a] - 目标）；更新本身是对的"),
+         (q_new, -delta)),
+        (tr("the TD error computed after the update (target - the new Q[s, a], which is "
+            "(1 - alpha) * delta): compute delta first,\n    then move Q[s, a]",
+            "TD 误差是在更新之后算的（目标 - 新的 Q[s, a]，即 (1 - alpha) * delta）：先算 delta，"
+            "\n    再更新 Q[s, a]"), (q_new, target - q_new)),
+        (tr("the step alpha * delta returned where the TD error delta belongs",
+            "返回的是这一步的大小 alpha * delta，应该返回 TD 误差 delta"), (q_new, alpha * delta))]
+    return found
+
+
+def check_td_control(fn, sarsa):
+    for what, (s, a, r, s_next, a_next, terminated, alpha, gamma) in tabular_cases(sarsa):
+        Q = tabular_table()
+        before = Q.copy()
+        args = (s, a, r, s_next) + ((a_next,) if sarsa else ()) + (terminated, alpha, gamma)
+        got = fn(Q, *args)
+        case = (before, s, a, r, s_next, a_next, terminated, alpha, gamma, sarsa)
+        q_new, delta = tabular_by_hand(*case)
+        try:
+            td = float(got)
+        except (TypeError, ValueError):
+            td = None
+        changed = [(int(i), int(j)) for i, j in zip(*np.nonzero(Q != before))]
+        named = []
+        try:
+            if not isinstance(Q, np.ndarray) or Q.shape != before.shape:
+                raise Failed(tr("the table Q was replaced: update its entry in place",
+                                "Q 表被换掉了：要原地更新它的那一项"))
+            others = [ij for ij in changed if ij != (s, a)]
+            if others and any(i == s_next for i, _ in others):
+                named = [tr("the entry of s' updated (Q[s_next, ...]) where Q[s, a] belongs: the "
+                            "update moves the pair just left, (s, a)",
+                            "更新的是 s' 的那一项（Q[s_next, ...]），应该是 Q[s, a]：要更新的是"
+                            "刚离开的那一对 (s, a)")]
+            if others:
+                raise Failed(tr(f"entries other than Q[s, a] = Q[{s}, {a}] changed: {others} "
+                                f"(only Q[s, a] moves)", f"除了 Q[s, a] = Q[{s}, {a}] 之外，"
+                                f"还有别的项变了：{others}（只有 Q[s, a] 会变）"))
+            if not changed and abs(q_new - before[s, a]) > 1e-9:
+                raise Failed(tr("Q did not change: update the table in place (Q[s, a] += ...); "
+                                "Q = ... or Q.copy() leaves the caller's table as it was",
+                                "Q 没有变：要原地更新这张表（Q[s, a] += ...）；Q = ... 或 Q.copy() "
+                                "不会改动调用者手里的那张表"))
+            if abs(Q[s, a] - q_new) > 1e-6:
+                same_q = [(label, d) for label, (q, d) in tabular_mistakes(*case)
+                          if abs(Q[s, a] - q) < 1e-6]
+                named = [label for label, d in same_q if td is None or abs(td - d) < 1e-6] or [
+                    label for label, _ in same_q]
+                raise Failed(tr(f"Q[{s}, {a}] after the update: expected {q_new:.6g}, got "
+                                f"{Q[s, a]:.6g}", f"更新之后的 Q[{s}, {a}]：应该是 {q_new:.6g}，"
+                                f"得到的是 {Q[s, a]:.6g}"))
+            if td is None or abs(td - delta) > 1e-6:
+                named = [label for label, (q, d) in tabular_mistakes(*case)
+                         if td is not None and abs(q - q_new) < 1e-9 and abs(td - d) < 1e-6]
+                shown = f"{td:.6g}" if td is not None else repr(got)
+                raise Failed(tr(f"the TD error returned: expected {delta:.6g}, got {shown}",
+                                f"返回的 TD 误差：应该是 {delta:.6g}，得到的是 {shown}") + (tr(
+                    " (nothing returned: return delta, the TD error, as a float)",
+                    "（没有返回值：要返回 TD 误差 delta，一个浮点数）") if got is None else ""))
+        except Failed as e:
+            raise Failed(tr("case: ", "例子：") + what + f"\n  {e}" + (tr(
+                "\n  this is exactly what this mistake gives: ",
+                "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None
+
+
 class FixedNoise(torch.distributions.Normal):
     """A Normal whose draws use a given eps: u = mean + sigma * eps (rsample); sample() is the
     same number without the gradient, as torch's."""
@@ -1485,12 +1847,13 @@ def show(ex, args):
                      if not callable(a) and not isinstance(a, SimpleNamespace))
 
 
-def gradients(f, args, parameters):
-    """{network output's name: its gradient} after backward() of f(*args)'s loss (its first
-    output), on copies of the case's inputs; None if the loss carries no gradient at all."""
+def gradients(f, args, parameters, index=0):
+    """{network output's name: its gradient} after backward() of f(*args)'s loss (its output
+    `index`, the first by default), on copies of the case's inputs; None if the loss carries no
+    gradient at all."""
     args = copy.deepcopy(args)
     out = f(*args)
-    loss = out[0] if isinstance(out, tuple) else out
+    loss = out[index] if isinstance(out, tuple) and len(out) > index else out
     if not (torch.is_tensor(loss) and loss.requires_grad):
         return None
     loss.backward()
@@ -1503,24 +1866,48 @@ def gradients(f, args, parameters):
 
 def compare_gradients(ex, fn, args):
     """Where values cannot tell, the gradient can: the loss's gradient with respect to each
-    network output of the case, yours against the script's own function's."""
+    network output of the case, yours against the script's own function's. An exercise whose
+    function returns several losses (ex.losses: their indices among its outputs) has each one's
+    gradient compared, the message saying which."""
     if not any(isinstance(a, Fixed) or torch.is_tensor(a) and a.requires_grad for a in args):
         return
     own = getattr(ex.owner(), ex.function)
     parameters = list(inspect.signature(own).parameters)
-    reference, yours = gradients(own, args, parameters), gradients(fn, args, parameters)
-    if reference is None:
-        return
-    cut = ("" if not getattr(ex, "cut", None) else
-           tr("\n  this is exactly what this mistake does: ",
-              "\n  这正是这个常见错误的表现：\n    ") + ex.cut())
+    losses = getattr(ex, "losses", (0,))
+    for index in losses:
+        loss = ex.outputs[index]
+        reference = gradients(own, args, parameters, index)
+        if reference is None:
+            continue
+        yours = gradients(fn, args, parameters, index)
+        try:
+            compare_loss_gradients(reference, yours, lambda kind: gradient_named(ex, loss, kind))
+        except Failed as e:
+            raise Failed((tr(f"{loss}: ", f"{loss}：") if len(losses) > 1 else "") + str(e)) \
+                from None
+
+
+def gradient_named(ex, loss, kind):
+    """The mistake a gradient failure of this kind ("cut", "stray": where none belongs) of the
+    output `loss` shows, as a line to add to the message, or ''."""
+    hook = getattr(ex, "gradient_mistake", None)
+    label = hook(loss, kind) if hook else ""
+    if not label and kind == "cut" and getattr(ex, "cut", None):
+        label = ex.cut()
+    return (tr("\n  this is exactly what this mistake does: ",
+               "\n  这正是这个常见错误的表现：\n    ") + label) if label else ""
+
+
+def compare_loss_gradients(reference, yours, named):
+    """One loss's gradients, yours against the reference's; `named(kind)`: the known mistake's
+    line, or ''."""
     if yours is None:
         raise Failed(tr(
             "gradient cut: your loss has the right value and carries no gradient at all (it was "
             "computed\n  under torch.no_grad(), from .item() or .detach(), or from a tensor made "
             "anew): the optimizer\n  would change nothing",
             "梯度被切断：你的损失数值对，但完全不带梯度（它是在 torch.no_grad() 下算的，或经过了 "
-            ".item()、\n  .detach()，或由新建的张量算出）：优化器什么也改不了") + cut)
+            ".item()、\n  .detach()，或由新建的张量算出）：优化器什么也改不了") + named("cut"))
     for name, r in reference.items():
         g = yours[name]
         if torch.allclose(g, r, atol=1e-6, rtol=1e-4):
@@ -1531,7 +1918,7 @@ def compare_gradients(ex, fn, args):
                 f"or a tensor made\n  anew, on the way from {name} to the loss): expected "
                 f"{rounded(r)}, got zeros",
                 f"梯度被切断：数值对，但梯度传不到 {name}（从 {name} 到损失的路上有 .detach() "
-                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0") + cut)
+                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0") + named("cut"))
         if r.abs().max() <= 1e-8:
             raise Failed(tr(
                 f"a gradient where none belongs: the value is right, and your loss sends a "
@@ -1540,7 +1927,8 @@ def compare_gradients(ex, fn, args):
                 f"carries it): "
                 f"got {rounded(g)}, expected zeros",
                 f"多出来的梯度：数值对，但你的损失把梯度传进了 {name}，这个损失不该训练它（本该是常数的"
-                f"量带着梯度，\n  例如用正在训练的网络重新算的优势）：得到 {rounded(g)}，应该是 0"))
+                f"量带着梯度，\n  例如用正在训练的网络重新算的优势）：得到 {rounded(g)}，应该是 0")
+                + named("stray"))
         if torch.allclose(g, -r, atol=1e-6, rtol=1e-4):
             raise Failed(tr(
                 f"gradient reversed: the value is right, and the gradient with respect to {name} "
@@ -1573,6 +1961,10 @@ def worked_cases(ex, fn):
         return check_dqn_target(fn)
     if ex.script == "sac_walker" and ex.function == "compute_loss_actor":
         return check_sac_actor_loss(fn)
+    if ex.function == "reward_to_go":
+        return check_reward_to_go(fn)
+    if ex.script == "q_learning_cliffwalking":
+        return check_td_control(fn, sarsa=ex.function == "sarsa_update")
     for what, args, expected in ex.cases():
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
         try:
@@ -1605,7 +1997,8 @@ def worked_cases(ex, fn):
             compare_gradients(ex, fn, args)
         except Failed as e:
             raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
-                         + f"{show(ex, args)}\n  {e}{named_mistake(ex, args, got, fn)}") from None
+                         + f"{show(ex, args)}\n  {e}"
+                         + named_mistake(ex, args, got, fn, expected)) from None
 
 
 # ==== Known mistakes: where a wrong value is exactly what a named mistake gives, say so =========
@@ -1821,11 +2214,32 @@ def beta_mistakes(beta, d, cfg):
              beta / cfg.beta_factor if d <= lo else beta * cfg.beta_factor if d >= hi else beta)]
 
 
-def named_mistake(ex, args, got, fn=None):
-    """The name of a known mistake whose value `got` (the function's first output) is, or ''."""
+def same_value(got, value):
+    """True where `got` is `value`: tensors of one shape, close; or numbers, equal."""
+    try:
+        if torch.is_tensor(value):
+            return (torch.is_tensor(got) and got.shape == value.shape
+                    and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5))
+        return isinstance(got, (int, float)) and abs(got - value) < 1e-9
+    except (TypeError, RuntimeError):
+        return False
+
+
+def same_outputs(got, value):
+    """`value` a tuple (a mistake's outputs, None where any will do): each output matches;
+    else the first output (or `got` itself) is `value`."""
+    if isinstance(value, tuple):
+        return (isinstance(got, tuple) and len(got) >= len(value)
+                and all(v is None or same_value(g, v) for g, v in zip(got, value)))
+    return same_value(got[0] if isinstance(got, tuple) else got, value)
+
+
+def named_mistake(ex, args, got, fn=None, expected=None):
+    """The name of a known mistake whose value `got` (the function's first output, or all of
+    them where the mistake gives a tuple) is, or ''. A mistake that gives the right value
+    (`expected`) in this case is never named: a wrong gradient with the right value is not it."""
     if ex.mistakes is None:
         return ""
-    got = got[0] if isinstance(got, tuple) else got
     mistakes = ex.mistakes(*args)
     if ex.name == "group_advantages" and fn is not None:  # three denominators, one value here
         pick = group_eps_mistake(fn)
@@ -1837,14 +2251,9 @@ def named_mistake(ex, args, got, fn=None):
     for label, value in mistakes:
         if value is None:  # this mistake gives the right value in this case
             continue
-        try:
-            same = (torch.is_tensor(got) and torch.is_tensor(value) and got.shape == value.shape
-                    and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5))
-            same = same or (not torch.is_tensor(value) and isinstance(got, (int, float))
-                            and abs(got - value) < 1e-9)
-        except (TypeError, RuntimeError):
-            same = False
-        if same:
+        if expected is not None and same_outputs(expected, value):
+            continue
+        if same_outputs(got, value):
             return tr("\n  this is exactly what this mistake gives: ",
                       "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
     return ""
@@ -1950,6 +2359,7 @@ def real_loop(ex, fn):
         raise never_called(ex, tr("stage (b)", "第 (b) 关"))
     unit = (tr("step", "第 {} 步") if ex.script in ("ddpg_walker", "td3_walker", "sac_walker")
             else tr("gradient step", "第 {} 个梯度步") if ex.script == "dqn_cartpole"
+            else tr("episode", "第 {} 个回合") if ex.script == "q_learning_cliffwalking"
             else tr("update", "第 {} 次更新"))
     for i, (a, b) in enumerate(zip(reference, yours)):
         for key in a:
@@ -2012,6 +2422,8 @@ def learns(ex, fn):
                 f"under {GRPO_BAR} (the script's own: 0.94 to 0.96 on seeds 0-4)",
                 f"GRPO 之后留出题目上的 pass@1 是 {after:.3f}（监督学习之后是 {before:.3f}），低于 "
                 f"{GRPO_BAR}（脚本自己的在种子 0 到 4 上是 0.94 到 0.96）"))
+    elif ex.script == "q_learning_cliffwalking":
+        cliff_walked(ex, result)
     elif "evaluations" in result:  # DDPG, TD3 on InvertedPendulum-v5: the pole held to the end
         means = [e["eval_mean"] for e in result["evaluations"]]
         last = means[-HOLD:]
@@ -2032,6 +2444,37 @@ def learns(ex, fn):
                         f"CartPole-v1 练了 {result['global_step']} 步还没解决（脚本自己的能解决）："
                         f"最后 20 个回合的平均回报是 {recent:.1f}"))
     return result
+
+
+def cliff_walked(ex, result):
+    """Stage (c) on CliffWalking: Sarsa's greedy path is the safe one (to the goal, longer than
+    13 steps, never on the cliff's edge); Q-learning's the optimal one, its Q there Q*."""
+    script = importlib.import_module(ex.script)
+    agent = "sarsa" if ex.function == "sarsa_update" else "q_learning"
+    (path, G), optimal = result["paths"][agent], result["optimal"]
+    cells = [s for s, _ in path]
+    shown = tr(f"\n  its greedy path from the start: cells {cells}, return {G:.0f}",
+               f"\n  它从起点出发的贪心路径：格子 {cells}，回报 {G:.0f}")
+    if agent == "sarsa" and (math.isnan(G) or len(path) <= 13 or CLIFF_EDGE & set(cells)):
+        raise Failed(tr(
+            "Sarsa's greedy path after 500 episodes (seed 0) is not the safe one: the script's own "
+            "reaches the goal in 17 steps,\n  keeping a row away from the cliff's edge (cells "
+            "25-34); Sarsa values the epsilon-greedy policy it follows, falls included",
+            "练了 500 个回合（种子 0）之后，Sarsa 的贪心路径不是安全的那条：脚本自己的用 17 步到达"
+            "终点，\n  和悬崖边（格子 25-34）隔着一行；Sarsa 估的是它自己这个 ε-贪心策略的价值，"
+            "掉下悬崖也算在内") + shown)
+    if agent == "q_learning":
+        error = script.q_error(result["tables"]["q_learning"], result["q_star"], optimal)
+        best = result["v_star"][result["start"]]
+        if path != optimal or error > 1e-6:
+            raise Failed(tr(
+                f"Q-learning after 500 episodes (seed 0): its greedy path is not the optimal one "
+                f"(13 steps along the cliff's edge,\n  return {best:.0f} "
+                f"= V*(start)), or its Q on that path is not Q* (mean |Q - Q*| = {error:.3g}; "
+                f"the script's own: 0)",
+                f"练了 500 个回合（种子 0）之后，Q 学习的贪心路径不是最优的那条（沿着悬崖边 13 步，"
+                f"\n  回报 {best:.0f} = V*(起点)），或者它在这条路径上的 Q "
+                f"不是 Q*（|Q - Q*| 的平均是 {error:.3g}；脚本自己的是 0）") + shown)
 
 
 # ==== The exercises =========================================================================
@@ -2078,6 +2521,19 @@ SAC_LOOP = dict(SAC_FAST, total_timesteps=600, start_steps=300, eval_every=100, 
 SAC_LEARN = dict(SAC_FAST, seed=1, total_timesteps=15_000, print_every=10**6)
 
 
+# REINFORCE: a few updates of 4 whole episodes (the pole falls within tens of steps at first);
+# learning: the defaults, 150,000 steps of their 500,000 (seeds 0-9 solve by 76,659, in 4 to
+# 10 s), so that a wrong answer is told in seconds rather than minutes
+REINFORCE_LOOP = dict(CARTPOLE_LOOP, total_timesteps=1000)
+REINFORCE_LEARN = dict(CARTPOLE_LEARN, total_timesteps=150_000)
+# Sarsa and Q-learning on CliffWalking: the first 30 episodes (the first ones are long random
+# walks: thousands of updates); learning: the defaults (S&B example 6.6, 500 episodes, seed 0),
+# under a second, the run tests/test_q_learning_cliffwalking.py checks
+TABULAR_LOOP = dict(seed=0, total_episodes=30, gifs=False, curves=False, print_every=10**6)
+TABULAR_LEARN = dict(seed=0, gifs=False, curves=False, print_every=10**6)
+CLIFF_EDGE = set(range(25, 35))  # the cells right above the cliff (row 2, columns 1 to 10)
+
+
 def ON_REAL_DATA():
     return tr("Your function passed the worked cases, and on the script's real data it gives "
               "another number:\n  compare its inputs there (their shapes, several envs, the "
@@ -2095,12 +2551,14 @@ def OFF_POLICY():
 
 
 def exercise(name, script, function, owner, cases, loop, learn, hint, outputs=("output",),
-             mistakes=None, cut=None):
-    """cut: the mistake's name where the value is right and the gradient cut, if one fits."""
+             mistakes=None, cut=None, losses=(0,), gradient_mistake=None):
+    """cut: the mistake's name where the value is right and the gradient cut, if one fits;
+    losses: the outputs whose gradients (a) compares (their indices); gradient_mistake(loss,
+    kind): the mistake a gradient failure of output `loss` shows ("cut", "stray"), or ''."""
     return SimpleNamespace(name=name, script=script, function=function, cases=cases,
                            owner=lambda: importlib.import_module(owner), loop=loop,
                            learn=learn, loop_hint=hint, outputs=outputs, mistakes=mistakes,
-                           cut=cut)
+                           cut=cut, losses=losses, gradient_mistake=gradient_mistake)
 
 
 EXERCISES = {ex.name: ex for ex in (
@@ -2210,6 +2668,32 @@ EXERCISES = {ex.name: ex for ex in (
              SAC_LOOP, SAC_LEARN, lambda: tr("The actor descends your loss, and alpha follows "
                                             "your log pi. ", "演员沿你的损失下降，alpha 跟着你的 log π 调整。")
              + OFF_POLICY(), outputs=("actor_loss", "logp")),
+    exercise("reward_to_go", "reinforce_cartpole", "reward_to_go", "reinforce_cartpole",
+             lambda: [], REINFORCE_LOOP, REINFORCE_LEARN,
+             lambda: tr("Every episode's G_t comes from your function: the first update that "
+                        "differs is the first batch of\n  whole episodes where your G_t "
+                        "differ (the pole falls in these first episodes: no time limit yet).",
+                        "每个回合的 G_t 都来自你的函数：第一次不同的那次更新，就是你的 G_t 第一次"
+                        "不同的那批完整回合\n  （这几个回合里杆都倒了，还没有碰到时间截断）。"),
+             outputs=("G",)),
+    exercise("reinforce_loss", "reinforce_cartpole", "reinforce_loss", "reinforce_cartpole",
+             reinforce_cases, REINFORCE_LOOP, REINFORCE_LEARN, ON_REAL_DATA,
+             outputs=("loss_pi", "loss_v", "weights"), mistakes=reinforce_mistakes,
+             losses=(0, 1), gradient_mistake=reinforce_gradient_mistake),
+    exercise("sarsa_update", "q_learning_cliffwalking", "sarsa_update", "q_learning_cliffwalking",
+             lambda: [], TABULAR_LOOP, TABULAR_LEARN, lambda: tr(
+                 "Sarsa's table is updated by your function at every step: its columns "
+                 "(sarsa_*) differ first, at the first\n  episode where the table differs "
+                 "(Q-learning's columns stay the script's own).",
+                 "Sarsa 的表每一步都由你的函数更新：它的那几列（sarsa_*）最先不同，就在表第一次不同的"
+                 "\n  那个回合（Q 学习的那几列还是脚本自己的）。")),
+    exercise("q_learning_update", "q_learning_cliffwalking", "q_learning_update",
+             "q_learning_cliffwalking", lambda: [], TABULAR_LOOP, TABULAR_LEARN, lambda: tr(
+                 "Q-learning's table is updated by your function at every step: its columns "
+                 "(q_learning_*) differ first, at the\n  first episode where the table differs "
+                 "(Sarsa's columns stay the script's own).",
+                 "Q 学习的表每一步都由你的函数更新：它的那几列（q_learning_*）最先不同，就在表第一次"
+                 "不同的\n  那个回合（Sarsa 的那几列还是脚本自己的）。")),
 )}
 
 
@@ -2274,7 +2758,7 @@ def check(name, fn=None, learning=True, say=print):
             return False
         seconds = time.time() - start
         say(line(name, stage, tr(f"pass ({seconds:.1f} s)", f"通过（{seconds:.1f} 秒）"),
-                 note or ""))
+                 note if isinstance(note, str) else ""))  # (c) returns train()'s result
     return True
 
 

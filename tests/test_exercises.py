@@ -741,6 +741,115 @@ WRONG["ddpg_update"] += [
     (script_with("ddpg_update", "return critic_loss.detach(), actor_loss.detach()",
                  "return critic_loss, actor_loss"), "(a)", "the losses returned with their graph")]
 
+RTG = """def reward_to_go(rewards, gamma, last_value=0.0):
+                {}"""
+WRONG["reward_to_go"] = [
+    (script_with("reward_to_go", "return returns", "return np.full(len(rewards), G)  # G_0"),
+     "(a)", "the whole episode's return G_0 for every step"),
+    (script_with("reward_to_go", "for t in reversed(range(len(rewards))):",
+                 "for t in range(len(rewards)):"), "(a)", "the sum run forward"),
+    (RTG.format("return np.cumsum([gamma ** k * r for k, r in enumerate(rewards)])"), "(a)",
+     "a running sum from the episode's start"),
+    (RTG.format("return np.array([sum(gamma ** k * rewards[k] for k in range(t, len(rewards))) "
+                "for t in range(len(rewards))])"), "(a)",
+     "gamma^k counted from the episode's start"),
+    (script_with("reward_to_go", "G = rewards[t] + gamma * G", "G = gamma * (rewards[t] + G)"),
+     "(a)", "the reward itself discounted"),
+    (script_with("reward_to_go", "G = rewards[t] + gamma * G", "G = rewards[t] + G"), "(a)",
+     "gamma left out"),
+    (script_with("reward_to_go", "np.zeros(len(rewards)), last_value",
+                 "np.zeros(len(rewards)), 0.0"), "(a)", "last_value ignored"),
+    (script_with("reward_to_go", "returns, G = np.zeros(len(rewards)), last_value",
+                 "rewards = list(rewards[:-1]) + [rewards[-1] + last_value]  # a last reward\n"
+                 "    returns, G = np.zeros(len(rewards)), 0.0"), "(a)",
+     "last_value not discounted"),
+    (RTG.format("""returns, G = [], last_value
+                for t in reversed(range(len(rewards))):
+                    G = rewards[t] + gamma * G
+                    returns.append(G)  # never turned round
+                return np.array(returns)"""), "(a)", "the returns in reverse order"),
+]
+WRONG["reinforce_loss"] = [(script_with("reinforce_loss", old, new), "(a)", needle)
+                           for old, new, needle in [
+    ("loss_pi = -(", "loss_pi = (", "the sign: +mean(log pi * weights)"),
+    ("* weights).mean()", "* weights).sum()",
+     "a sum over the batch (.sum()) where the script takes the mean (.mean()): the step then "
+     "grows with the batch's length"),
+    ("ret - values.detach() if", "ret + values.detach() if", "the baseline added, G + V"),
+    ("ret - values.detach() if", "values.detach() - ret if", "the weight the other way round"),
+    ("weights = ret - values.detach() if baseline else ret", "weights = ret",
+     "baseline ignored: the weights are G_t alone where baseline = True"),
+    ("weights = ret - values.detach() if baseline else ret", "weights = ret - values.detach()",
+     "baseline ignored: G_t - V(s_t) where baseline = False"),
+    ("weights = ret - values.detach() if baseline else ret",
+     "weights = ret - values.detach() if baseline else ret\n"
+     "    weights = (weights - weights.mean()) / (weights.std() + 1e-8)", "the weights normalized"),
+    ("log_prob(act)", "log_prob(act).exp()", "pi(a|s) where log pi(a|s) belongs"),
+    ("loss_v = 0.5 * (", "loss_v = (", "the baseline's loss not halved"),
+    ("** 2).mean()", "** 2).sum()", "the baseline's loss summed"),
+    ("ret - values.detach() if", "ret - values if",
+     "loss_pi: a gradient where none belongs: the value is right, and your loss sends a gradient "
+     "into V(s)"),
+    ("ret - values.detach() if", "ret - values if", "V(s_t) not detached in the weight"),
+    ("((values - ret)", "((values.detach() - ret)", "V(s_t) detached in loss_v too"),
+    ("policy(obs)", "policy(obs).detach()", "log pi(a|s) computed without a gradient"),
+]]
+
+
+def td_answer(sarsa, value=None, delta="{target} - Q[s, a]", step="Q[s, a] += alpha * td_error",
+              back="float(td_error)", cut="(1 - terminated)", discount="gamma * "):
+    """sarsa_update's or q_learning_update's function, written out: the target r + gamma *
+    (1 - terminated) * value, its TD error, the step and the return, each replaceable."""
+    value = value or ("Q[s_next, a_next]" if sarsa else "Q[s_next].max()")
+    target = f"(r + {discount}{cut} * {value})" if cut else f"(r + {discount}{value})"
+    head = ("def sarsa_update(Q, s, a, r, s_next, a_next, terminated, alpha, gamma):" if sarsa
+            else "def q_learning_update(Q, s, a, r, s_next, terminated, alpha, gamma):")
+    return f"""{head}
+                td_error = {delta.format(target=target)}
+                {step}
+                return {back}"""
+
+
+TD_MISTAKES = [  # (the part written otherwise, the words the message must hold): both exercises
+    (dict(cut=""), "a bootstrap at a termination"),
+    (dict(cut="(~terminated)"), "~terminated on a Python bool"),
+    (dict(discount=""), "gamma left out"),
+    (dict(step="Q[s, a] = r + gamma * (1 - terminated) * VALUE"),
+     "alpha left out: Q[s, a] = target, a full replacement"),
+    (dict(delta="Q[s, a] - {target}"), "the TD error's sign: delta = Q[s, a] - target"),
+    (dict(back="-float(td_error)"), "the TD error returned with its sign flipped"),
+    (dict(back="float(r + gamma * (1 - terminated) * VALUE - Q[s, a])"),
+     "the TD error computed after the update"),
+    (dict(back="float(alpha * td_error)"), "the step alpha * delta returned"),
+    (dict(step="Q[s_next, 0] += alpha * td_error"), "the entry of s' updated"),
+    (dict(step="Q = Q.copy(); Q[s, a] += alpha * td_error"),
+     "Q did not change: update the table in place"),
+    (dict(back="None"), "nothing returned: return delta"),
+]
+
+
+def td_wrong(sarsa):
+    own = "Q[s_next, a_next]" if sarsa else "Q[s_next].max()"
+    return [(td_answer(sarsa, **{k: v.replace("VALUE", own) for k, v in parts.items()}), "(a)",
+             needle) for parts, needle in TD_MISTAKES]
+
+
+WRONG["sarsa_update"] = td_wrong(True) + [
+    (td_answer(True, value="Q[s_next].max()"), "(a)",
+     "max_a' Q(s', a') where Sarsa takes the next action a' (that is Q-learning's target"),
+    (td_answer(True, value="Q[s_next, a]"), "(a)", "Q(s', a), the action just taken, where Sarsa "
+     "takes the next action a_next"),
+]
+WRONG["q_learning_update"] = td_wrong(False) + [
+    (td_answer(False, value="Q[s_next, a]"), "(a)", "Q(s', a), the action just taken valued at "
+     "s', where Q-learning takes the best action there"),
+    (td_answer(False, value="Q[s_next].mean()"), "(a)", "the mean over the actions of s'"),
+    (td_answer(False, value="np.argmax(Q[s_next])"), "(a)", "argmax (an action's index) where "
+     "the max (its value) belongs"),
+    (td_answer(False, value="Q[s].max()"), "(a)", "the max at s, not at s'"),
+    (td_answer(False, value="Q.max()"), "(a)", "the max over the whole table"),
+]
+
 @pytest.fixture(autouse=True)
 def english():
     """The messages in English whatever the locale (the checker's default follows it)."""
@@ -934,12 +1043,14 @@ def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monk
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target", "td3_target"])
+@pytest.mark.parametrize("name", ["gae", "kl_penalty", "a2c_loss", "td_target", "td3_target",
+                                  "reinforce_loss", "sarsa_update", "q_learning_update"])
 def test_the_scripts_own_functions_learn(name):
     """Stage (c) with the scripts' own functions: one exercise per script (the others of the
     same script run the very same training). These are the CartPole scripts', DDPG's and
     TD3's learning tests (seed 0; TD3's seed 2, 25,000 steps: exercises/check.py's TD3_LEARN);
-    DQN's and SAC's are in their scripts' tests."""
+    DQN's and SAC's are in their scripts' tests. REINFORCE's is its defaults' run, cut at
+    150,000 steps; CliffWalking's has one exercise per agent, each with its own bar."""
     ex = check.EXERCISES[name]
     result = check.learns(ex, getattr(ex.owner(), ex.function))  # raises check.Failed if not
     if "eval_returns" in result:  # CartPole: solved (learns checks it), from short episodes,
@@ -948,6 +1059,19 @@ def test_the_scripts_own_functions_learn(name):
     if ex.script in ("ddpg_walker", "td3_walker", "sac_walker"):  # from falling to balancing
         assert result["evaluations"][0]["eval_mean"] < 200  # (DDPG's seeds 0-4: experiments.md)
         assert [e["eval_mean"] for e in result["evaluations"][-check.HOLD:]] == [1000] * check.HOLD
+
+
+def test_the_cliff_bars_tell_sarsa_from_q_learning():
+    """Stage (c) on CliffWalking (under a second each): Sarsa written with Q-learning's max
+    walks the cliff's edge, and fails Sarsa's bar (the safe path); Q-learning written with the
+    mean over s' (expected Sarsa under a uniform policy) misses Q-learning's (the optimal
+    path, its Q there Q*)."""
+    for name, source, words in (
+            ("sarsa_update", td_answer(True, value="Q[s_next].max()"), "is not the safe one"),
+            ("q_learning_update", td_answer(False, value="Q[s_next].mean()"),
+             "its greedy path is not the optimal one")):
+        with pytest.raises(check.Failed, match=words):
+            check.learns(check.EXERCISES[name], compile_answer(source, name))
 
 
 @pytest.mark.slow
