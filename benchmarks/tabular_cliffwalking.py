@@ -91,9 +91,24 @@ def table(record):
     return lines
 
 
+def summary_rows(record):
+    """The results pages' table: per agent, each figure's median [min, max] over the seeds."""
+    rows = ["| agent | online return, last 100 | greedy path: steps | its return | "
+            "mean abs(Q - Q*) on it | greedy path loops |", "|---|---|---|---|---|---|"]
+    for agent, name in tabular.AGENTS.items():
+        s = record["summary"][agent]
+        cells = [f"{s[figure]['median']:{spec}} [{s[figure]['min']:{spec}}, "
+                 f"{s[figure]['max']:{spec}}]" for figure, spec in zip(FIGURES, (".1f", ".0f",
+                                                                              ".0f", ".2f"))]
+        rows.append(f"| {name} | {' | '.join(cells)} | {s['loops']} of "
+                    f"{len(record['rows'])} seeds |")
+    return rows
+
+
 def main():
     if "--table" in sys.argv[1:]:
-        print("\n".join(table(json.loads(OUT.read_text()))))
+        record = json.loads(OUT.read_text())
+        print("\n".join(table(record) + [""] + summary_rows(record)))
         return
     started, rows = time.time(), []
     with tempfile.TemporaryDirectory(prefix="tabular_") as folder:

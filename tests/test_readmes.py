@@ -350,3 +350,19 @@ def test_results_reinforce_table_comes_from_the_committed_record(path):
     rows = bench.table("benchmarks/results/reinforce_cartpole.json")
     for row in rows[2:] if path != RESULTS else rows:  # the Chinese page: its own header
         assert row in lines, f"{path.name} lacks the REINFORCE table row {row!r}"
+
+
+@pytest.mark.parametrize("path", [RESULTS, ROOT / "docs" / "results.zh-CN.md"])
+def test_results_tabular_table_comes_from_the_committed_record(path):
+    """The Sarsa / Q-learning table on each results page is what `tabular_cliffwalking.py
+    --table` prints from benchmarks/results/tabular_cliffwalking.json."""
+    import json
+
+    spec = importlib.util.spec_from_file_location("tabular_bench",
+                                                  ROOT / "benchmarks" / "tabular_cliffwalking.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    lines = path.read_text(encoding="utf-8").splitlines()
+    rows = bench.summary_rows(json.loads(bench.OUT.read_text()))
+    for row in rows[2:] if path != RESULTS else rows:  # the Chinese page: its own header
+        assert row in lines, f"{path.name} lacks the Sarsa / Q-learning table row {row!r}"
