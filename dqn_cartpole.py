@@ -123,6 +123,8 @@ class Config(cli.SolvedFlags):
         cli.check(self.start_steps >= self.batch_size,
                   f"--start-steps must be at least --batch-size ({self.batch_size}), "
                   f"got {self.start_steps}")
+        cli.check(self.buffer_size >= self.start_steps, f"--buffer-size ({self.buffer_size}) must "
+                  f"hold the warm-up's --start-steps ({self.start_steps}) transitions")
         cli.check(self.total_timesteps > self.start_steps,
                   f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
                   f"({self.start_steps}): learning starts after the warm-up")

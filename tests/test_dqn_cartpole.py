@@ -11,7 +11,7 @@ import pytest
 import torch
 
 import dqn_cartpole as dqn
-from conftest import ROOT
+from conftest import ROOT, run_main
 
 
 class Table(torch.nn.Module):
@@ -144,3 +144,12 @@ def test_its_maps_are_titled_max_q_and_the_greedy_action(tmp_path):
     saved = np.load(run / "maps.npz")
     assert saved["value_label"].item() == "max_a Q(s, a)"
     assert saved["policy_label"].item() == "greedy: pushes right"
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("args", [["--buffer-size", "10", "--batch-size", "64"],
+                                  ["--buffer-size", "500"]])  # the warm-up's 1000 do not fit
+def test_a_buffer_smaller_than_the_warm_up_is_refused_in_one_line(args, tmp_path, capsys):
+    p = run_main("dqn_cartpole.py", *args, "--run-dir", tmp_path, capsys=capsys)
+    assert p.returncode == 2 and "--buffer-size" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and not any(tmp_path.iterdir())
