@@ -282,3 +282,18 @@ def test_evaluate_hands_back_each_episodes_states_and_rewards():
     for episode, total in zip(seen, returns):
         assert episode["rewards"].sum() == total and len(episode["obs"]) == len(episode["rewards"])
         assert episode["terminated"]  # always pushing left: the pole falls
+
+
+def test_pi_actions_greedy_plays_the_most_probable_action_and_otherwise_draws_from_pi():
+    """greedy=True: argmax of the logits on every one of 200 observations (here the
+    observation is the logits); without it, actions drawn with pi's probabilities (1/5, 3/5,
+    1/5 here, within 0.03 over 3000 draws), the same draws again from the same seed."""
+    logits = np.random.default_rng(0).normal(size=(200, 3)) * 0.3  # close: a draw often differs
+    greedy = common.pi_actions(lambda x: x, "cpu", seed=0, greedy=True)
+    assert [greedy(row) for row in logits] == list(logits.argmax(1))
+    row = np.log([1.0, 3.0, 1.0])
+    drawn = common.pi_actions(lambda x: x, "cpu", seed=1)
+    actions = [drawn(row) for _ in range(3000)]
+    assert np.bincount(actions, minlength=3) / 3000 == pytest.approx([0.2, 0.6, 0.2], abs=0.03)
+    again = common.pi_actions(lambda x: x, "cpu", seed=1)
+    assert [again(row) for _ in range(3000)] == actions

@@ -153,3 +153,77 @@ def test_a_buffer_smaller_than_the_warm_up_is_refused_in_one_line(args, tmp_path
     p = run_main("dqn_cartpole.py", *args, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 2 and "--buffer-size" in p.stderr, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and not any(tmp_path.iterdir())
+
+
+def small_run(tmp_path, **kw):
+    """SMOKE's run (ten learning phases of 4 gradient steps), a small network, no pictures."""
+    return dqn.train(dqn.Config(**{**dqn.SMOKE, "hidden": 16, "gifs": False, "curves": False,
+                                   "run_dir": str(tmp_path), "print_every": 10**6, **kw}))
+
+
+@pytest.mark.quick
+def test_the_target_network_is_the_network_as_it_was_at_the_last_copy(tmp_path, monkeypatch):
+    """Before gradient step k (counted over the whole run, across learning phases), Q' is a
+    network of its own holding exactly the weights Q had after step C * (k // C), C the
+    target_update_interval (3 here, so copies fall inside phases of 4 steps and between
+    them): the initial weights until the first copy, and each copy moves it. A target never
+    refreshed, one refreshed the wrong way (Q reset to Q'), one step late, or the network
+    itself, fails."""
+    calls = []
+    real = dqn.dqn_update
+
+    def update(q_net, q_target, optimizer, batch, cfg):
+        calls.append(dict(aliased=q_target is q_net,
+                          net=[p.detach().clone() for p in q_net.parameters()],
+                          target=[p.detach().clone() for p in q_target.parameters()]))
+        return real(q_net, q_target, optimizer, batch, cfg)
+
+    monkeypatch.setattr(dqn, "dqn_update", update)
+    small_run(tmp_path, target_update_interval=3, q_check_every=10**6)
+    C = 3
+    assert len(calls) == 10 * 4
+    for k, call in enumerate(calls):
+        assert not call["aliased"]
+        copied = calls[C * (k // C)]["net"]  # Q as it was when the last copy was taken
+        assert all(torch.equal(t, c) for t, c in zip(call["target"], copied)), k
+        if k % C:  # Q has moved on since: the two differ
+            assert not all(torch.equal(t, n) for t, n in zip(call["target"], call["net"])), k
+        elif k:  # a copy came just before this step: Q' moved to where Q had gone
+            before = calls[k - 1]["target"]
+            assert not all(torch.equal(t, b) for t, b in zip(call["target"], before)), k
+
+
+@pytest.mark.quick
+def test_every_greedy_evaluation_plays_argmax_q(tmp_path, monkeypatch, capsys):
+    """The policy each evaluation plays, in training (the Q-against-return checks, the
+    evaluation at the end) and in --eval of the saved model, picks argmax_a Q(s, a) on every
+    one of 300 observations, never a draw from softmax(Q) nor the argmin: the untrained
+    network's Q values are close together, so a sampled action would differ often."""
+    played = []  # (the policy handed to common.evaluate, whether it recorded its states)
+    real_evaluate = dqn.common.evaluate
+
+    def evaluate(env_id, policy, episodes, seed, **kw):
+        played.append((policy, "trajectories" in kw))
+        return real_evaluate(env_id, policy, episodes, seed, **kw)
+
+    nets = []
+
+    class Recorded(dqn.QNetwork):  # the first one made is the network that learns
+        def __init__(self, *args):
+            super().__init__(*args)
+            nets.append(self)
+
+    monkeypatch.setattr(dqn.common, "evaluate", evaluate)
+    monkeypatch.setattr(dqn, "QNetwork", Recorded)
+    run = small_run(tmp_path, q_check_every=5, eval_episodes=1)["run_dir"]
+    assert [recorded for _, recorded in played] == [True, True, False]  # 2 checks, then the end
+    obs = torch.randn(300, 4) * torch.tensor([1.0, 1.0, 0.1, 1.0])
+    expected = [nets[0](obs).argmax(-1).tolist()] * 3
+    p = run_main("dqn_cartpole.py", "--eval", run, "--eval-episodes", 1, capsys=capsys)
+    assert p.returncode == 0, p.stderr
+    expected.append(nets[-1](obs).argmax(-1).tolist())  # the saved weights, loaded again
+    assert torch.equal(nets[-1].l3.weight, nets[0].l3.weight)
+    assert len(played) == 4
+    with torch.no_grad():
+        for (policy, _), want in zip(played, expected):
+            assert [policy(o.numpy()) for o in obs] == want

@@ -81,3 +81,113 @@ def test_the_check_plays_the_current_pi(name, capsys):
     assert not report.pi_holds(play, cfg, 475, step=0)
     assert ("check at step 0: the policy as it is now (actions drawn from pi) averages"
             in capsys.readouterr().out)
+
+
+@pytest.mark.quick
+def test_the_greedy_evaluation_plays_argmax_and_each_way_of_acting_is_evaluated_as_itself(
+        tmp_path, capsys):
+    """report.sampled_and_greedy: its first way of acting draws from pi (not always the most
+    probable action), its second ("greedy_returns") plays argmax on every observation; and
+    finish_updates evaluates each way of acting it is handed as that way acts (always left,
+    then leaning with the pole), each result under its own key."""
+    import time
+    import types
+
+    logits_of = lambda obs: torch.stack([obs[..., 2] * 10, obs[..., 3] * 10], -1)  # noqa: E731
+    obs = np.random.default_rng(0).normal(size=(300, 4)).astype(np.float32) * 0.01
+    drawn, greedy = (way(0) for _, _, way in report.sampled_and_greedy(logits_of, "cpu"))
+    keys = [key for key, _, _ in report.sampled_and_greedy(logits_of, "cpu")]
+    assert keys == ["eval_returns", "greedy_returns"]
+    best = [int(o[2] < o[3]) for o in obs]
+    assert [greedy(o) for o in obs] == best
+    assert [drawn(o) for o in obs] != best  # logits within 0.3 of each other: draws differ
+
+    cfg = types.SimpleNamespace(solved_window=20, total_timesteps=10, curves=False,
+                                tensorboard=False, gifs=False, eval_episodes=2, eval_seed=7,
+                                env_id="CartPole-v1")
+    run = types.SimpleNamespace(cfg=cfg, dir=tmp_path, global_step=10, solved_step=None,
+                                episodes=[], interrupted=False, start_time=time.time())
+    left, lean = (lambda o: 0), (lambda o: int(o[2] + o[3] > 0))
+    result = report.finish_updates(run, 475, [("eval_returns", "left", lambda seed: left),
+                                              ("greedy_returns", "lean", lambda seed: lean)],
+                                   [], {})
+    assert result["eval_returns"] == common.evaluate("CartPole-v1", left, 2, 7)
+    assert result["greedy_returns"] == common.evaluate("CartPole-v1", lean, 2, 7)
+    assert min(result["greedy_returns"]) > max(result["eval_returns"])
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("k", [1, 3, 20])
+def test_running_mean_is_the_mean_of_the_last_k_values_by_brute_force(k):
+    """curve.png's "mean of the last k episodes": at each episode i, the mean of episodes
+    max(0, i - k + 1) .. i (fewer at the start, never more than k; 20 > 12: all so far)."""
+    import plots
+
+    y = np.random.default_rng(k).integers(0, 500, size=12).astype(float)
+    want = [np.mean(y[max(0, i - k + 1):i + 1]) for i in range(len(y))]
+    assert plots.running_mean(y, k) == pytest.approx(want)
+
+
+def a_log(tmp_path, window=None):
+    """An UpdateLog with a solved window (None: none), or with window="evaluations" an
+    EvaluationLog, of a CartPole script's flags."""
+    import dataclasses
+
+    import cli
+    import runlog
+
+    if window == "evaluations":
+        cfg = dataclasses.make_dataclass("Cfg", [("env_id", str, "CartPole-v1"),
+                                                 ("seed", int, 0), ("resume", str, None),
+                                                 ("total_timesteps", int, 1000)],
+                                         bases=(cli.OutputFlags,))(run_dir=str(tmp_path),
+                                                                    print_every=5)
+        return runlog.EvaluationLog("test", cfg, "cpu", {}, learning_starts=0, eval_every=50)
+    cfg = dataclasses.make_dataclass("Cfg", [("env_id", str, "CartPole-v1"), ("seed", int, 0),
+                                             ("total_timesteps", int, 1000)],
+                                     bases=(cli.SolvedFlags,))(
+        run_dir=str(tmp_path), stop_when_solved=True, solved_window=window)
+    return runlog.UpdateLog("test", cfg, {})
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("window", [1, 5])
+def test_the_solved_check_averages_exactly_the_last_window_training_episodes(window, tmp_path):
+    """Episodes ending one at a time, returns drawn around the threshold: after each, the
+    recent return is the mean of the last `window` episodes, and solved() says yes exactly when
+    there are `window` of them and that mean reaches the threshold (>=: 10 exactly counts)."""
+    run = a_log(tmp_path, window)
+    returns = np.random.default_rng(window).integers(6, 14, size=80).astype(float)
+    returns[40:40 + window] = 10.0  # a mean of exactly the threshold
+    solved_at = None
+    for step, ret in enumerate(returns, 1):
+        run.episodes.append((step, ret))
+        run.global_step = step
+        last = returns[max(0, step - window):step]
+        assert run.recent_return() == pytest.approx(np.mean(last)), step
+        assert run.solved(10.0) == (step >= window and np.mean(last) >= 10.0), step
+        if solved_at is None and step >= window and np.mean(last) >= 10.0:
+            solved_at = step
+        assert run.solved_step == solved_at
+    assert solved_at is not None
+
+
+@pytest.mark.quick
+def test_an_evaluations_training_mean_is_over_the_last_ten_episodes_before_it(tmp_path,
+                                                                             capsys):
+    """evaluations.csv's train_return_mean10 and the progress line's return(10): the mean of
+    the last 10 training episodes ended by then (all of them while there are fewer)."""
+    import runlog
+
+    run = a_log(tmp_path, "evaluations")
+    returns = np.random.default_rng(0).integers(0, 1000, size=25).astype(float)
+    for step, ret in enumerate(returns, 1):
+        run.episode_ended(step, ret)
+        run.evaluation(step, [0.0])
+        want = np.mean(returns[max(0, step - runlog.RECENT):step])
+        assert run.evaluations[-1]["train_return_mean10"] == pytest.approx(want), step
+        capsys.readouterr()
+        run.progress(step, None, [])
+        if step % 5 == 0:
+            assert f"return(10) {want:8.1f}" in capsys.readouterr().out, step
+    assert runlog.RECENT == 10

@@ -233,3 +233,153 @@ def test_the_pages_numbers_are_the_records():
         for name in ("default", "beta 1", "judge"):
             for first, last in bench.overopt(name):
                 assert f"{first} → {last}" in text, (page, name, first, last)
+
+
+@pytest.fixture(scope="module")
+def recorded_run(tmp_path_factory):
+    """A tiny run of every stage, with a step large enough that PPO and DPO move their models
+    within a few steps, and what train() handed its pieces: the supervised model as the
+    supervised phase left it (a copy) and the live policy; each PPO step's answers, log pi_old
+    and log pi_ref as passed to the per-token rewards, the raw GAE advantages and the batch the
+    update gets; the judged pairs; each DPO step's pairs and loss inputs, the DPO model, and
+    what the run printed."""
+    import contextlib
+    import copy
+    import io
+
+    rec = dict(ppo=[], dpo=[], pairs=[], fits=[], fit_steps=[], last_logp={})
+    real = {name: getattr(rlhf, name) for name in (
+        "stage_done", "token_logp", "per_token_rewards", "token_advantages", "ppo_update",
+        "preference_pairs", "fit_on_pairs", "dpo_loss")}
+
+    def stage_done(result, name, model, *args):
+        if name == "supervised":
+            rec["sft"], rec["policy"] = copy.deepcopy(model), model
+        return real["stage_done"](result, name, model, *args)
+
+    def token_logp(model, seqs, P):
+        rec["last_logp"].update(seqs=seqs, P=P)
+        return real["token_logp"](model, seqs, P)
+
+    def per_token_rewards(score, logp_old, logp_ref, mask, beta):
+        rewards, kl = real["per_token_rewards"](score, logp_old, logp_ref, mask, beta)
+        seqs, P = rec["last_logp"]["seqs"], rec["last_logp"]["P"]
+        with torch.no_grad():  # the policy as it is now, before this step's update
+            policy_logp = real["token_logp"](rec["policy"], seqs, P)
+        rec["ppo"].append(dict(seqs=seqs, P=P, logp_old=logp_old.clone(), mask=mask.clone(),
+                               logp_ref=logp_ref.clone(), kl=kl.clone(), policy=policy_logp))
+        return rewards, kl
+
+    def token_advantages(*args):
+        adv, ret = real["token_advantages"](*args)
+        rec["ppo"][-1]["raw_adv"] = adv.clone()
+        return adv, ret
+
+    def ppo_update(policy, value_net, opt, data, cfg, gen):
+        rec["ppo"][-1]["data"] = {k: v.clone() if torch.is_tensor(v) else v
+                                  for k, v in data.items()}
+        return real["ppo_update"](policy, value_net, opt, data, cfg, gen)
+
+    def preference_pairs(*args):
+        out = real["preference_pairs"](*args)
+        rec["pairs"].append(out)
+        return out
+
+    def fit_on_pairs(model, pair_loss, *args):
+        rec["fits"].append(model)
+        rec["fit_steps"].append([])
+        steps = rec["fit_steps"][-1]
+
+        def recorded(idx):
+            steps.append(idx.clone())
+            return pair_loss(idx)
+        return real["fit_on_pairs"](model, recorded, *args)
+
+    def dpo_loss(logp_w, logp_l, ref_w, ref_l, beta):
+        rec["dpo"].append(dict(logp_w=logp_w, ref_w=ref_w, ref_l=ref_l))
+        return real["dpo_loss"](logp_w, logp_l, ref_w, ref_l, beta)
+
+    out = io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(out):
+        for name, fake in dict(stage_done=stage_done, token_logp=token_logp,
+                               per_token_rewards=per_token_rewards, ppo_update=ppo_update,
+                               token_advantages=token_advantages, dpo_loss=dpo_loss,
+                               preference_pairs=preference_pairs,
+                               fit_on_pairs=fit_on_pairs).items():
+            mp.setattr(rlhf, name, fake)
+        cfg = rlhf.Config(**{**TINY, "sft_steps": 10, "ppo_steps": 3, "learning_rate": 1e-3,
+                             "dpo_lr": 1e-2, "rm_batch": 8, "dpo_epochs": 1},
+                          curves=False, run_dir=str(tmp_path_factory.mktemp("rlhf")))
+        rlhf.train(cfg)
+    rec["out"] = out.getvalue()
+    return rec
+
+
+@pytest.mark.quick
+def test_the_per_token_kl_is_to_the_supervised_model_not_the_policy(recorded_run):
+    """At every PPO step, log pi_ref is the supervised model's (as the supervised phase left
+    it, whatever PPO has done to the policy since) and log pi_old the policy's as it samples;
+    the KL term of each token is their difference. By the last step the two differ: a KL to
+    the policy itself (zero), or to a reference that moves with it, would fail."""
+    rec = recorded_run
+    assert len(rec["ppo"]) == 3
+    for k, step in enumerate(rec["ppo"]):
+        seqs, P, mask = step["seqs"], step["P"], step["mask"]
+        with torch.no_grad():
+            ref = rlhf.token_logp(rec["sft"], seqs, P) * mask
+        assert torch.allclose(step["logp_ref"] * mask, ref, atol=1e-5), k
+        assert torch.allclose(step["logp_old"] * mask, step["policy"] * mask, atol=1e-5), k
+        assert torch.allclose(step["kl"], (step["logp_old"] - step["logp_ref"]) * mask), k
+    last = rec["ppo"][-1]  # by then PPO has moved the policy away from pi_ref
+    assert (last["kl"].abs() * last["mask"]).max() > 1e-3
+
+
+@pytest.mark.quick
+def test_the_advantages_are_whitened_over_the_answers_tokens_alone(recorded_run):
+    """What each PPO update gets: GAE's advantages centred and scaled over the real tokens of
+    the batch (their mean 0, their std 1, in the same order as before), and 0 on the tokens
+    sampled after an answer's "." (there are some here). Whitening over every position, the
+    padding's zeros among them, leaves the real tokens' mean off 0."""
+    padded = 0
+    for k, step in enumerate(recorded_run["ppo"]):
+        real, adv = step["mask"] > 0, step["data"]["adv"]
+        padded += int((~real).sum())
+        assert torch.equal(step["data"]["mask"], step["mask"])
+        assert (adv[~real] == 0).all(), k
+        assert adv[real].mean().item() == pytest.approx(0.0, abs=1e-5), k
+        assert adv[real].std().item() == pytest.approx(1.0, rel=1e-4), k
+        raw = step["raw_adv"][real]
+        assert torch.allclose(adv[real], (raw - raw.mean()) / raw.std(), atol=1e-4), k
+    assert padded > 0  # the case the mask is for
+
+
+@pytest.mark.quick
+def test_dpo_is_anchored_to_the_frozen_supervised_model(recorded_run):
+    """Each DPO step's log pi_ref(y|x) is the supervised model's (as the supervised phase left
+    it) on that step's pairs, carries no gradient, and stays put while the DPO model (whose
+    log pi does carry one) moves away from it; the printed implicit-reward accuracy on the
+    held-out pairs compares log pi/pi_ref of the DPO model against that same frozen model."""
+    import re
+
+    rec = recorded_run
+    chosen, rejected, _ = rec["pairs"][0]  # the training pairs, then the held-out ones
+    test_w, test_l, _ = rec["pairs"][1]
+    steps, P = rec["fit_steps"][1], rec["ppo"][0]["P"]  # the reward model's fit, then DPO's
+    assert len(steps) == len(rec["dpo"]) >= 3
+    for k, (idx, call) in enumerate(zip(steps, rec["dpo"])):
+        assert not call["ref_w"].requires_grad and not call["ref_l"].requires_grad, k
+        assert call["logp_w"].requires_grad, k
+        with torch.no_grad():
+            ref_w = rlhf.answer_logp(rec["sft"], chosen[idx], P)
+            ref_l = rlhf.answer_logp(rec["sft"], rejected[idx], P)
+        assert torch.allclose(call["ref_w"], ref_w, atol=1e-5), k
+        assert torch.allclose(call["ref_l"], ref_l, atol=1e-5), k
+    last = rec["dpo"][-1]
+    assert (last["logp_w"].detach() - last["ref_w"]).abs().max() > 1e-3  # the DPO model moved
+    dpo = rec["fits"][1]
+    with torch.no_grad():
+        w, l = (rlhf.answer_logp(dpo, y, P) - rlhf.answer_logp(rec["sft"], y, P)
+                for y in (test_w, test_l))
+    printed = float(re.search(r"implicit reward: held-out pair accuracy ([\d.]+)",
+                              rec["out"]).group(1))
+    assert printed == pytest.approx((w > l).float().mean().item(), abs=1e-3)

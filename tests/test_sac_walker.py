@@ -247,3 +247,25 @@ def test_help_shows_the_temperature(capsys):
     p = run_main("sac_walker.py", "--help", capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert all(flag in p.stdout for flag in ("--alpha", "--alpha-lr", "--target-entropy"))
+
+
+@pytest.mark.quick
+def test_each_target_critic_follows_its_own_critic(monkeypatch, tmp_path):
+    """Each target critic starts as a copy of its own critic; from one critic update to the next,
+    on train() itself, it moves tau of the way toward that critic as the last update left it
+    (the actor step between them leaves the critics alone): critic_target toward Q1,
+    critic2_target toward Q2. tau = 0.5 here, so a target that follows the other critic (the
+    two start from different weights), stays put or moves the wrong fraction is far off."""
+    from test_replay_loops import record_training
+
+    _, _, _, calls = record_training(sac, monkeypatch, tmp_path, "update_critics", tau=0.5)
+    assert len(calls) > 50
+    for target, own in (("critic_target", "critic"), ("critic2_target", "critic2")):
+        assert all(torch.equal(t, q) for t, q in zip(calls[0]["nets"][target].parameters(),
+                                                      calls[0]["nets"][own].parameters()))
+    for k in range(1, len(calls)):
+        before, now = calls[k - 1]["nets"], calls[k]["nets"]
+        for target, own in (("critic_target", "critic"), ("critic2_target", "critic2")):
+            for t0, t1, q in zip(before[target].parameters(), now[target].parameters(),
+                                 now[own].parameters()):
+                assert torch.allclose(t1, 0.5 * t0 + 0.5 * q, atol=1e-6), (k, target)

@@ -120,3 +120,53 @@ def test_the_shipped_td3_walker_walks():
     --eval command replays it), still loads as a TD3 model and walks: one episode, >= 1000."""
     (ret,) = play(ROOT / "docs" / "td3_walker2d.pt", 1, script=td3)
     assert ret >= 1000, ret
+
+
+@pytest.mark.quick
+def test_the_actor_step_climbs_q1_and_its_loss_is_minus_q1():
+    """TD3's actor loss is -mean Q1(s, mu(s)) (not +Q1, not Q2), and the actor steps that
+    update_actor_and_targets takes raise Q1(s, mu(s)) on the batch's states while the
+    critics stay as they are."""
+    torch.manual_seed(0)
+    cfg = td3.Config(env_id="InvertedPendulum-v5", hidden=16, actor_lr=1e-2)
+    nets = td3.build(3, 2, np.full(2, -1.0), np.full(2, 1.0), cfg, "cpu")
+    obs = torch.randn(64, 3)
+    with torch.no_grad():
+        q1_before = nets["critic"](obs, nets["actor"](obs)).mean().item()
+        q2_before = nets["critic2"](obs, nets["actor"](obs)).mean().item()
+    assert q1_before != pytest.approx(q2_before, abs=1e-3)  # which critic matters here
+    loss = td3.compute_loss_actor(nets["actor"], nets["critic"], obs)
+    assert loss.item() == pytest.approx(-q1_before, rel=1e-6)
+    critics = [p.detach().clone() for p in [*nets["critic"].parameters(),
+                                             *nets["critic2"].parameters()]]
+    losses = [td3.update_actor_and_targets(nets, obs, cfg).item() for _ in range(10)]
+    assert losses[0] == pytest.approx(-q1_before, rel=1e-6)
+    with torch.no_grad():
+        q1_after = nets["critic"](obs, nets["actor"](obs)).mean().item()
+    assert q1_after > q1_before + 1e-3, (q1_before, q1_after)
+    assert all(torch.equal(a, b) for a, b in zip(critics, [*nets["critic"].parameters(),
+                                                            *nets["critic2"].parameters()]))
+
+
+@pytest.mark.quick
+def test_the_actions_played_while_learning_are_mu_plus_gaussian_noise(monkeypatch, tmp_path):
+    """After the warm-up, train() plays mu(s) plus N(0, expl_noise * half-width) noise, one
+    draw a step: with the actor held still (no actor step in this short run) the played
+    action minus mu(s) over the 96 learning steps has a mean near 0 and a std near
+    0.1 * 3 = 0.3 (InvertedPendulum's actions lie in [-3, 3]), and is never 0. No noise, or
+    noise not scaled to the action box, fails."""
+    from test_replay_loops import START, TOTAL, record_training
+
+    _, record, _, calls = record_training(td3, monkeypatch, tmp_path, "update_critics",
+                                          policy_delay=10**6)
+    actor = calls[0]["nets"]["actor"]  # the actor as it was (and stays) through learning
+    assert all(torch.equal(p, q) for p, q in zip(actor.parameters(),
+                                                 calls[-1]["nets"]["actor"].parameters()))
+    learning = record[START:]
+    assert len(learning) == TOTAL - START
+    with torch.no_grad():
+        mu = actor(torch.as_tensor(np.array([s["obs"] for s in learning]), dtype=torch.float32))
+    noise = np.array([s["action"] for s in learning]).reshape(mu.shape) - mu.numpy()
+    assert (np.abs(mu.numpy()) < 2).all()  # far from the box's edge: no clipping
+    assert (noise != 0).all()
+    assert abs(noise.mean()) < 0.1 and 0.2 < noise.std() < 0.42, (noise.mean(), noise.std())
