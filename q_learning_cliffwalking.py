@@ -24,7 +24,7 @@ network in place of the table, a replay buffer and a target network; ddpg_walker
 td_target is the same target for continuous actions, the max replaced by the actor's action.
 
     python q_learning_cliffwalking.py                  # both agents, 500 episodes: seconds
-    python q_learning_cliffwalking.py --epsilon 0.01   # rarer exploration: the gap narrows
+    python q_learning_cliffwalking.py --epsilon 0.01   # rarer exploration: the online returns meet
     python q_learning_cliffwalking.py --eval runs/latest   # each saved greedy policy plays
 
 中文导读：表格型的 Sarsa 和 Q 学习（Q-learning），Sutton & Barto 例 6.6 的悬崖行走。两个智能体都按
@@ -77,7 +77,7 @@ class Config(cli.OutputFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        cli.check_ranges(self, total_episodes="> 0", alpha="(0, 1]", epsilon="[0, 1]",
+        cli.check_ranges(self, seed=">= 0", total_episodes="> 0", alpha="(0, 1]", epsilon="[0, 1]",
                          gamma="(0, 1]", max_episode_steps="> 0", window="> 0")
 
 

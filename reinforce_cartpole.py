@@ -12,7 +12,7 @@ inside.png measures both on the same episodes. The loop in train(), top to botto
     returns  the reward-to-go G_t = r_t + gamma r_{t+1} + ... to each episode's end
     update   one gradient step on -log pi(a_t|s_t) * (G_t - V(s_t)); V fitted to G_t
     log      one progress.csv row per update; a progress line now and then
-`diff reinforce_cartpole.py actor_critic_cartpole.py`: A2C bootstraps from V (n-step returns).
+Next, actor_critic_cartpole.py (A2C): its a2c_targets bootstrap from V (n-step returns).
 
     python reinforce_cartpole.py                  # train until solved (seconds on a CPU)
     python reinforce_cartpole.py --no-baseline    # the plain estimator: G_t alone
@@ -83,7 +83,8 @@ class Config(cli.SolvedFlags):
     """whole episodes played before each gradient step (1 .. 16): a less noisy gradient"""
     baseline: bool = True
     """subtract the learned V(s_t) from G_t in the policy's loss (Sutton & Barto 2018, 13.4);
-    --no-baseline: G_t alone, the plain estimator (V is still fitted, to measure both)"""
+    --no-baseline: G_t alone (V is still fitted, to measure both, and guesses the tail of an
+    episode cut by the time limit)"""
     learning_rate: float = 0.01
     """Adam step size of the policy (1e-3 .. 3e-2)"""
     vf_learning_rate: float = 0.01
@@ -95,7 +96,7 @@ class Config(cli.SolvedFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        cli.check_ranges(self, total_timesteps="> 0", episodes_per_update="> 0", hidden="> 0",
+        cli.check_ranges(self, seed=">= 0", total_timesteps="> 0", episodes_per_update="> 0", hidden="> 0",
                          learning_rate="> 0", vf_learning_rate="> 0", gamma="(0, 1]")
 
 
@@ -161,9 +162,8 @@ def pictures(cfg):
     """curve.png: pi's entropy; inside.png (docs/inside.md): the variance of the gradient
     estimate with and without the baseline, V(s_t) against G_t."""
     return dict(curve=[[plots.lines("entropy")]], inside=[[
-        plots.lines("grad_var_G", "grad_var_adv", log=True,
-                    title="variance of grad J's estimate, episode to episode"),
-        plots.lines("var_ratio", hlines=(1,), title="the baseline's share of that variance"),
+        plots.lines("grad_var_G", "grad_var_adv", log=True, title="Var of grad J's estimates"),
+        plots.lines("var_ratio", hlines=(1,), title="Var with V / Var without"),
         plots.scatters("ret", "values", "reward-to-go G_t", "V(s_t)")]])
 
 
@@ -233,15 +233,16 @@ def train(cfg: Config):
             data = {key: torch.as_tensor(np.array(batch[key]), device=device)
                     for key in ("obs", "act", "ret", "episode")}
             data["ret"] = data["ret"].float()  # float64 from numpy: as the network's float32
-            loss_pi, loss_v, weights = reinforce_loss(policy, value_net, data, cfg.baseline)
-            optimizer.zero_grad()
-            (loss_pi + loss_v).backward()  # disjoint parameters: each loss moves its own network
-            optimizer.step()
-            # --- what the baseline does: both estimators on the same episodes (inside.png) ---
+            # What the baseline does (inside.png): both estimators on these episodes, measured
+            # with the pi and V that played them, before the step
             with torch.no_grad():
                 values = value_net(data["obs"])
                 entropy = Categorical(logits=policy(data["obs"])).entropy().mean().item()
             spread = gradient_spread(policy, data, dict(G=data["ret"], adv=data["ret"] - values))
+            loss_pi, loss_v, weights = reinforce_loss(policy, value_net, data, cfg.baseline)
+            optimizer.zero_grad()
+            (loss_pi + loss_v).backward()  # disjoint parameters: each loss moves its own network
+            optimizer.step()
             stats = dict(loss_pi=loss_pi.item(), loss_v=loss_v.item(), entropy=entropy,
                          grad_var_G=spread["G"], grad_var_adv=spread["adv"],
                          var_ratio=spread["adv"] / max(spread["G"], 1e-12),
