@@ -154,8 +154,9 @@ class RandomState:
 
 
 class CtrlC:
-    """Around a training loop: a first Ctrl-C only sets `pressed`, so the loop can finish its
-    step and stop where nothing is half done; a second one ends the block at once."""
+    """Around a training loop: a first Ctrl-C (or SIGTERM: common.sigterm_as_ctrl_c) only sets
+    `pressed`, so the loop can finish its step and stop where nothing is half done; a second
+    one ends the block at once."""
 
     def __init__(self):
         self.pressed = False

@@ -1,6 +1,6 @@
 """The command line: the flags every script shares (the output flags, the solved rule's
 settings, the checkpoints of a script that resumes), a script's Config read from flags, and
-one-line errors with their exit codes (2: bad input, 130: Ctrl-C).
+one-line errors with their exit codes (2: bad input, 130: Ctrl-C, 143: SIGTERM).
 
 A Config is a @dataclass; each field is a flag (`num_envs: int = 8` -> `--num-envs 8`), its
 help the string under it, bool -> `--x/--no-x`, `float | None` also takes `none`.
@@ -21,7 +21,7 @@ import torch
 
 import help_zh
 import plots
-from common import UserError, from_ctrl_c, headless
+from common import UserError, from_ctrl_c, headless, sigterm_as_ctrl_c, stopped_by
 
 
 @dataclass
@@ -247,9 +247,11 @@ def check_ranges(config, **ranges):
 @contextlib.contextmanager
 def clear_exit():
     """Around main(): bad input, one `error:` line and exit 2; Ctrl-C, even turned into another
-    error, one line and exit 130."""
+    error, one line and exit 130; SIGTERM does what Ctrl-C does (common.sigterm_as_ctrl_c),
+    exit 143."""
     try:
-        yield
+        with sigterm_as_ctrl_c():
+            yield
     except UserError as e:  # named as argparse names its errors: "<script>.py: error: ..."
         prog = Path(sys.argv[0]).name
         print(f"{prog + ': ' if prog.endswith('.py') else ''}error: {e}", file=sys.stderr,
@@ -257,8 +259,9 @@ def clear_exit():
         sys.exit(2)
     except (KeyboardInterrupt, ImportError, RuntimeError, MemoryError, gym.error.Error) as e:
         if from_ctrl_c(e):
-            print("\ninterrupted (Ctrl-C)", file=sys.stderr, flush=True)
-            sys.exit(130)
+            name, code = stopped_by()
+            print(f"\ninterrupted ({name})", file=sys.stderr, flush=True)
+            sys.exit(code)
         if isinstance(e, MemoryError) or "allocate" in str(e):  # e.g. --buffer-size too large
             print(f"error: not enough memory for these settings (too many envs or steps, or too "
                   f"large a buffer?): {str(e).splitlines()[0] if str(e) else 'MemoryError'}",

@@ -1,7 +1,7 @@
 """What the scripts share and a reader reads beside them: discounted returns and GAE (with
 worked examples), running a policy (evaluation), what the pictures of inside.png measure,
-making the envs, and at the end the two small tools everything else builds on (one-line
-errors, whole-file writes). It imports no other module of this project.
+making the envs, and at the end the small tools everything else builds on (one-line errors,
+SIGTERM as Ctrl-C, whole-file writes). It imports no other module of this project.
 
 The training loops live in the scripts, each read top to bottom on its own. What a reader
 may skip is in cli.py (flags), runlog.py (run folders, logs), checkpoints.py (saving, exact
@@ -318,7 +318,8 @@ def make_continuous_env(env_id):
 
 
 # =============================================================================
-# Tools the other modules build on: one-line errors, whole-file writes, headless rendering
+# Tools the other modules build on: one-line errors, headless rendering, SIGTERM as Ctrl-C,
+# whole-file writes
 # =============================================================================
 
 
@@ -327,7 +328,8 @@ class UserError(Exception):
 
 
 def from_ctrl_c(error):
-    """Is `error` a KeyboardInterrupt, or raised because of one (MuJoCo's import, a torch write)?"""
+    """Is `error` a KeyboardInterrupt (Ctrl-C, or a SIGTERM under sigterm_as_ctrl_c), or raised
+    because of one (MuJoCo's import, a torch write)?"""
     while error is not None and not isinstance(error, KeyboardInterrupt):
         error = error.__cause__ or error.__context__  # Python keeps this chain free of loops
     return error is not None
@@ -369,9 +371,53 @@ def env_errors(env_id):
         raise UserError(f"not enough memory for {env_id} (too many envs or steps?)") from None
 
 
+_terminated = []  # the SIGTERMs that sigterm_as_ctrl_c turned into a Ctrl-C
+
+
+@contextlib.contextmanager
+def sigterm_as_ctrl_c():
+    """Within the block, SIGTERM (`kill PID`, a Slurm job at its time limit, `docker stop`) does
+    what Ctrl-C does at that moment: a KeyboardInterrupt, or held back by ctrl_c_deferred, or a
+    training loop's stop at a whole step (checkpoints.CtrlC). Ctrl-C works too where this process
+    started with it ignored (a shell script's `cmd &`). stopped_by() then says which came."""
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    try:
+        if before[0] == signal.SIG_IGN:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGTERM, _as_ctrl_c)
+    except ValueError:  # not the main thread, which alone receives signals
+        before = None
+    _terminated.clear()
+    try:
+        yield
+    finally:
+        for signum, handler in zip((signal.SIGINT, signal.SIGTERM), before or ()):
+            if handler is not None:  # None: a handler set outside Python, left as it is
+                signal.signal(signum, handler)
+
+
+def _as_ctrl_c(signum, frame):
+    """SIGTERM's handler: remembered, then handled by whatever handles Ctrl-C right now."""
+    _terminated.append(signum)
+    ctrl_c = signal.getsignal(signal.SIGINT)
+    if not callable(ctrl_c):
+        raise KeyboardInterrupt
+    ctrl_c(signal.SIGINT, frame)
+
+
+def stopped_by():
+    """What stopped this process, and its exit code (128 + the signal's number, as a shell
+    reports a process the signal killed): ("Ctrl-C", 130), or ("SIGTERM", 143) once
+    sigterm_as_ctrl_c has turned a SIGTERM into a Ctrl-C."""
+    if _terminated:
+        return "SIGTERM", 128 + signal.SIGTERM
+    return "Ctrl-C", 128 + signal.SIGINT
+
+
 @contextlib.contextmanager
 def ctrl_c_deferred():
-    """Hold a Ctrl-C back while the block runs (a file write), then deliver it."""
+    """Hold a Ctrl-C (or a SIGTERM, under sigterm_as_ctrl_c) back while the block runs (a file
+    write), then deliver it."""
     before, pressed = signal.getsignal(signal.SIGINT), []
     try:
         signal.signal(signal.SIGINT, lambda signum, frame: pressed.append(signum))

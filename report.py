@@ -135,9 +135,9 @@ def finish_updates(run, threshold, play, before, pictures, maps=None):
 
 def saved_model(result):
     """train()'s result -> its run folder (its model.pt, for --watch); after a Ctrl-C, which
-    train() has already reported with what it saved, exit 130 instead."""
+    train() has already reported with what it saved, exit 130 instead (143 after a SIGTERM)."""
     if result["interrupted"]:
-        raise SystemExit(130)
+        raise SystemExit(common.stopped_by()[1])
     return str(result["run_dir"])
 
 

@@ -9,7 +9,8 @@ run at once, each in its own process with one torch thread, and give the very nu
 one after another in this process gives (every run seeds all it draws from). Past one
 machine, --cluster FOLDER hands each run to submitit (pip install submitit): a Slurm job
 where Slurm is (--partition NAME), a local process otherwise; the same numbers again.
-Ctrl-C stops it in one line: the runs that ended are kept, the same command goes on.
+Ctrl-C stops it in one line: the runs that ended are kept, the same command goes on. SIGTERM
+(`kill PID`, a Slurm time limit) does the same, with exit code 143.
 """
 
 import contextlib
@@ -102,12 +103,22 @@ def pool_deaf_to_ctrl_c(processes):
     """A pool of `processes` worker processes, one fresh process per run, on which Ctrl-C has
     no hold: a terminal sends it to them too, and this process alone answers it (leaving the
     pool's `with` block ends them). They are forked with SIGINT blocked, by this thread and
-    by the pool's own threads, which are started while it is: each inherits the block."""
-    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    by the pool's own threads, which are started while it is: each inherits the block.
+    SIGTERM, which this process turns into a Ctrl-C, ends a worker at once, as by default
+    (the pool's `with` block ends its workers so): blocked at the fork as well, each worker
+    puts it back to its default, then unblocks it."""
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
-        return multiprocessing.get_context("fork").Pool(processes, maxtasksperchild=1)
+        return multiprocessing.get_context("fork").Pool(processes, _sigterm_ends_it,
+                                                        maxtasksperchild=1)
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)  # a Ctrl-C held meanwhile: now
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)  # a signal held meanwhile: now
+
+
+def _sigterm_ends_it():
+    """A worker's first step: SIGTERM ends it, as in any process (the pool's way to end it)."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
 
 
 def one_run(task, job):
@@ -166,14 +177,16 @@ def recorded(record, job, columns):
 
 
 _TASK = None  # run()'s task, for the forked workers
+JOB_MINUTES = 24 * 60  # each job's time limit on the cluster (a run takes minutes)
 
 
 def on_cluster(task, jobs, folder, partition=None):
     """Each (variant, seed) run as a submitit job: on Slurm where `srun` is found (a job array,
-    `partition` if given), else a local process. submitit pickles `one_run` with the task
-    (the swapped functions by value, the scripts by name), so the jobs import the scripts:
-    their folders go on PYTHONPATH, and on Slurm `folder` must be on a filesystem the nodes
-    share. Yields what one_run returns, as the jobs finish."""
+    `partition` if given), else a local process. submitit pickles `one_run` (as a Job, which a
+    preempted or timed-out job queues again) with the task (the swapped functions by value,
+    the scripts by name), so the jobs import the scripts: their folders go on PYTHONPATH, and
+    on Slurm `folder` must be on a filesystem the nodes share. Yields what one_run returns,
+    as the jobs finish."""
     try:
         import submitit
     except ImportError:
@@ -183,12 +196,26 @@ def on_cluster(task, jobs, folder, partition=None):
     run_dir = Path(folder).resolve() / "runs"  # the runs' own folders: where the jobs write
     task = (*task[:5], str(run_dir))
     executor = submitit.AutoExecutor(folder=Path(folder) / "%j")
-    executor.update_parameters(timeout_min=24 * 60, cpus_per_task=1, name="experiment",
+    executor.update_parameters(timeout_min=JOB_MINUTES, cpus_per_task=1, name="experiment",
                                **({"slurm_partition": partition} if partition else {}))
-    submitted = executor.map_array(one_run, [task] * len(jobs), jobs)
+    submitted = executor.map_array(Job(), [task] * len(jobs), jobs)
     print(f"{len(submitted)} jobs on {executor.cluster} (logs: {folder})", flush=True)
     for job in submitit.helpers.as_completed(submitted):
         yield job.result()
+
+
+class Job:
+    """one_run as a submitit job. A job preempted or stopped at its time limit is asked for
+    its `checkpoint` (submitit's name for it), which queues the same run again: it starts
+    over, as a run keeps nothing halfway, and the runs that ended are kept by then."""
+
+    def __call__(self, task, job):
+        return one_run(task, job)
+
+    def checkpoint(self, task, job):
+        import submitit
+
+        return submitit.helpers.DelayedSubmission(self, task, job)
 
 
 def _one_run_of_task(job):
@@ -354,7 +381,8 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     CartPole, 2500 for DDPG), the figure drawn in a temporary folder and removed (a smoke
     test; the tests run it). more(curves, folder, settings): what else the experiment writes
     there (returns their paths); settings: those of its runs, --quick's included.
-    Ctrl-C: exit 130 and one line, the runs that ended kept (a rerun goes on from them)."""
+    Ctrl-C: exit 130 and one line, the runs that ended kept (a rerun goes on from them);
+    SIGTERM the same, exit 143."""
     cores = os.cpu_count() or 1
     if {"-h", "--help"} & set(sys.argv[1:]):
         print(sys.modules["__main__"].__doc__.strip())  # the experiment's question and what to see
@@ -365,8 +393,8 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
               f"N runs at once, one process and one torch thread each (default: one per core, "
               f"here {cores}); the numbers do not depend on it. --cluster FOLDER: each run a "
               "submitit job instead (Slurm where there is one, --partition NAME; else a local "
-              "process), its logs in FOLDER (pip install submitit). Ctrl-C: the runs that "
-              "ended are kept; the same command again goes on from there.")
+              "process), its logs in FOLDER (pip install submitit). Ctrl-C (or kill PID: exit "
+              "143): the runs that ended are kept; the same command again goes on from there.")
         raise SystemExit(0)
     given = options(sys.argv[1:])
     workers = given["workers"] or cores
@@ -374,6 +402,7 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
     if given["quick"]:  # quick_settings: overrides of `settings` that a quick budget needs
         seeds, budget, settings = seeds[:1], quick_budget, {**settings, **(quick_settings or {})}
     with contextlib.ExitStack() as stack:
+        stack.enter_context(common.sigterm_as_ctrl_c())
         folder = (Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="experiment_")))
                   if given["quick"] else DOCS if given["docs"] else OUT)
         record = None if given["quick"] else folder / f"{name}_runs"  # each run's log, as it ends
@@ -383,8 +412,9 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
             paths = [report(name, curves, folder, solved, what, panels),
                      *(more(curves, folder, settings) if more is not None else [])]
         except KeyboardInterrupt:
-            print(f"\ninterrupted (Ctrl-C): {stopped(record, variants, seeds)}", file=sys.stderr)
-            raise SystemExit(130) from None
+            how, code = common.stopped_by()
+            print(f"\ninterrupted ({how}): {stopped(record, variants, seeds)}", file=sys.stderr)
+            raise SystemExit(code) from None
         shown = ("not kept (--quick)" if given["quick"] else str(paths[0]) if len(paths) == 1
                  else f"{paths[0]} (and {', '.join(map(str, paths[1:]))})")
     print(f"\n{len(variants)} variants x {len(seeds)} seeds x {budget} steps in "
@@ -393,7 +423,7 @@ def main(name, script, variants, seeds=(0, 1, 2, 3, 4), budget=50_000, solved=47
 
 
 def stopped(record, variants, seeds):
-    """What an experiment stopped by Ctrl-C leaves, and how to go on: one line."""
+    """What an experiment stopped by Ctrl-C (or SIGTERM) leaves, and how to go on: one line."""
     if record is None:
         return "--quick keeps nothing; run it again to start over"
     kept, runs = kept_runs(record, variants, seeds), len(variants) * len(seeds)

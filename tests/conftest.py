@@ -55,30 +55,42 @@ def ctrl_c_default():
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def interrupt(script, *args, after, cwd=None, env=None):
-    """Start `python <script> args...`, send Ctrl-C (SIGINT) once a stdout line starts
-    with `after`; return (returncode, stdout, stderr). `cwd`: the folder it runs in (the
-    repository's by default); `env`: environment variables to add."""
-    code, out, err, _ = ctrl_c(script, *args, after=after, cwd=cwd, env=env, group=False)
+def ctrl_c_ignored():
+    """In the child: SIGINT ignored, as a shell script's `cmd &` starts it."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def interrupt(script, *args, after, cwd=None, env=None, signal=None, background=False):
+    """Start `python <script> args...`, send Ctrl-C (SIGINT; or `signal`, e.g. SIGTERM as
+    `kill PID` sends it) once a stdout line starts with `after`; return (returncode, stdout,
+    stderr). `cwd`: the folder it runs in (the repository's by default); `env`: environment
+    variables to add; `background`: started with SIGINT ignored, as a shell script's `cmd &`."""
+    code, out, err, _ = ctrl_c(script, *args, after=after, cwd=cwd, env=env, group=False,
+                               signal=signal, background=background)
     return code, out, err
 
 
-def interrupt_in_a_terminal(script, *args, after, cwd=None, env=None):
-    """interrupt(), with Ctrl-C sent as a terminal sends it: to the whole foreground process
-    group, the script and every process it started. `after`: the start of a line, or a tuple
-    of them, seen in that order. Returns (returncode, stdout, stderr, left): left, whether any
-    process of the group was still there once the script had exited (they are then killed)."""
-    return ctrl_c(script, *args, after=after, cwd=cwd, env=env, group=True)
+def interrupt_in_a_terminal(script, *args, after, cwd=None, env=None, signal=None):
+    """interrupt(), with Ctrl-C (or `signal`) sent as a terminal sends it: to the whole
+    foreground process group, the script and every process it started (as Slurm sends SIGTERM
+    to every process of a job). `after`: the start of a line, or a tuple of them, seen in that
+    order. Returns (returncode, stdout, stderr, left): left, whether any process of the group
+    was still there once the script had exited (they are then killed)."""
+    return ctrl_c(script, *args, after=after, cwd=cwd, env=env, group=True, signal=signal)
 
 
-def ctrl_c(script, *args, after, cwd, env, group):
-    import signal
+def ctrl_c(script, *args, after, cwd, env, group, signal=None, background=False):
+    import signal as signals
 
+    signal = signals.SIGINT if signal is None else signal
     env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
     env.pop("DISPLAY", None)
     proc = subprocess.Popen([sys.executable, str(ROOT / script), *map(str, args)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env, cwd=cwd or ROOT,
-                            preexec_fn=ctrl_c_default, start_new_session=group)
+                            preexec_fn=ctrl_c_ignored if background else ctrl_c_default,
+                            start_new_session=group)
     seen, waiting = [], [after] if isinstance(after, str) else list(after)
     for line in proc.stdout:  # wait until training is under way
         seen.append(line)
@@ -87,19 +99,19 @@ def ctrl_c(script, *args, after, cwd, env, group):
             if not waiting:
                 break
     if group:  # its own session, so its group's id is its pid
-        os.killpg(proc.pid, signal.SIGINT)
+        os.killpg(proc.pid, signal)
     else:
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(signal)
     try:
         out, err = proc.communicate(timeout=60)
     except subprocess.TimeoutExpired:  # it went on: end it (and its group), then fail
-        os.killpg(proc.pid, signal.SIGKILL) if group else proc.kill()
+        os.killpg(proc.pid, signals.SIGKILL) if group else proc.kill()
         proc.communicate()
         raise
     left = False
     if group:
         try:
-            os.killpg(proc.pid, signal.SIGKILL)  # raises if no process of the group is left
+            os.killpg(proc.pid, signals.SIGKILL)  # raises if no process of the group is left
             left = True
         except ProcessLookupError:
             pass

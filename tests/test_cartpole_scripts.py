@@ -3,6 +3,7 @@ reloads what it learned, and bad input ends in one clear line with exit code 2."
 
 import csv
 import importlib
+import signal
 import imageio.v3 as iio
 import numpy as np
 import pytest
@@ -183,34 +184,44 @@ def test_bad_input_is_one_line_and_exit_2(script, tmp_path, args, needle, capsys
     assert set(tmp_path.iterdir()) == before  # no run folder left behind
 
 
+# Ctrl-C, and SIGTERM (kill PID), which does what Ctrl-C does: (signal, exit code, its line)
+SIGNALS = [pytest.param((signal.SIGINT, 130, "interrupted (Ctrl-C)"), id="ctrl_c"),
+           pytest.param((signal.SIGTERM, 143, "interrupted (SIGTERM)"), id="sigterm")]
+
+
+@pytest.mark.parametrize("sent", SIGNALS)
 @pytest.mark.parametrize("script", ONE, indirect=True)
-def test_ctrl_c_while_gifs_are_written(script, tmp_path):
-    """After training: one line, exit 130, the model and logs kept, no half-written file."""
+def test_ctrl_c_while_gifs_are_written(script, tmp_path, sent):
+    """After training: one line, exit 130 (SIGTERM: 143), the model and logs kept, no
+    half-written file."""
+    how, exit_code, line = sent
     code, out, err = interrupt(f"{script.__name__}.py", "--run-dir", tmp_path, "--solved-return", 30,
-                               after="greedy evaluation")
-    assert code == 130, (out, err)
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+                               after="greedy evaluation", signal=how)
+    assert code == exit_code, (out, err)
+    assert "Traceback" not in err and err.strip().splitlines() == [line], err
     (run,) = tmp_path.iterdir()
     assert torch.load(run / "model.pt", weights_only=True)["global_step"] > 0
     assert rows(run / "progress.csv") and rows(run / "episodes.csv")
     assert not list(run.glob("*.tmp*"))
 
 
+@pytest.mark.parametrize("sent", SIGNALS)
 @pytest.mark.parametrize("script", ONE, indirect=True)
-def test_ctrl_c_during_eval(script, tmp_path):
+def test_ctrl_c_during_eval(script, tmp_path, sent):
+    how, exit_code, line = sent
     result = script.train(small(script, tmp_path, total_timesteps=1024, stop_when_solved=False,
                                 gifs=False, curves=False, eval_episodes=1))
     code, out, err = interrupt(f"{script.__name__}.py", "--eval", result["run_dir"],
-                               "--eval-episodes", 100_000, after="playing")
-    assert code == 130, (out, err)
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "interrupted" in err
+                               "--eval-episodes", 100_000, after="playing", signal=how)
+    assert code == exit_code, (out, err)
+    assert "Traceback" not in err and err.strip().splitlines() == [line], err
 
 
-def test_ctrl_c_during_watch(tmp_path):
+@pytest.mark.parametrize("sent", SIGNALS)
+def test_ctrl_c_during_watch(tmp_path, sent):
     """--watch with a display: each return printed as it ends, then Ctrl-C ends it in one line.
     SDL's dummy driver stands in for the screen (a DISPLAY is set, so the script allows --watch)."""
     import os
-    import signal
     import subprocess
     import sys
 
@@ -227,11 +238,12 @@ def test_ctrl_c_during_watch(tmp_path):
         seen.append(line)
         if line.startswith("episode 2/"):
             break
-    proc.send_signal(signal.SIGINT)
+    how, exit_code, line = sent
+    proc.send_signal(how)
     out, err = proc.communicate(timeout=60)
     assert "Ctrl-C stops" in "".join(seen) and seen[-1].startswith("episode 2/100000: return")
-    assert proc.returncode == 130, err
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert proc.returncode == exit_code, err
+    assert "Traceback" not in err and err.strip().splitlines() == [line], err
 
 
 @pytest.mark.quick

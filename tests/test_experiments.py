@@ -1,6 +1,7 @@
 """The experiments: each variant differs from the original only as its docstring says, the
 code it replaces is put back after its runs, and each file runs in its quick mode."""
 
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -322,15 +323,19 @@ def test_the_options_that_are_right():
         quick=False, docs=True, workers=None, cluster={"folder": "jobs", "partition": "cpu"})
 
 
-def tiny(folder, seeds, budget, name="tiny", saying=False):
+def tiny(folder, seeds, budget, name="tiny", saying=False, preempted=False):
     """An experiment file of our own in `folder`: advantage_normalization's two variants,
     `seeds` and `budget` of our choice (a real one's full run takes minutes). saying: each
     update of a run prints "update done" (to the real stdout: the runs' own is silenced), so
     that a test can tell when a run is inside its training loop; and after the table and the
-    figure, the experiment prints "writing more" and waits there for a Ctrl-C."""
+    figure, the experiment prints "writing more" and waits there for a Ctrl-C. preempted: a
+    cluster whose jobs have 5 minutes, where the first run to reach an update is signalled as
+    Slurm signals a job at its time limit (it leaves the file "preempted" in `folder`)."""
     script = folder / f"{name}.py"
     script.write_text(
         f'''"""Question: a tiny experiment, for the tests."""
+import os
+import signal
 import sys
 import time
 sys.path.insert(0, {str(ROOT / "experiments")!r})
@@ -353,11 +358,25 @@ def more_until_ctrl_c(curves, folder, settings):
         time.sleep(0.01)
 
 
+def ppo_update_timed_out_once(*args):
+    try:  # the first run here, once: submitit's signal (SIGUSR2) of a job at its time limit
+        os.close(os.open({str(folder / "preempted")!r}, os.O_CREAT | os.O_EXCL))
+        signal.raise_signal(signal.SIGUSR2)
+    except FileExistsError:
+        pass
+    return UPDATE(*args)
+
+
 VARIANTS, MORE = advantage_normalization.VARIANTS, None
 if {saying!r}:
     VARIANTS = {{name: {{**variant, "swap": [(ppo_cartpole, "ppo_update", ppo_update_saying_so)]}}
                 for name, variant in VARIANTS.items()}}
     MORE = more_until_ctrl_c
+if {preempted!r}:  # up to 10 minutes, submitit counts a signal as the time limit's
+    lab.JOB_MINUTES = 5
+    VARIANTS = {{name: {{**variant, "swap": [(ppo_cartpole, "ppo_update",
+                                             ppo_update_timed_out_once)]}}
+                for name, variant in VARIANTS.items()}}
 lab.main({name!r}, ppo_cartpole, VARIANTS, seeds={tuple(seeds)!r}, budget={budget}, more=MORE)
 ''')
     return script
@@ -395,6 +414,30 @@ def test_the_cluster_path_gives_the_same_csvs_through_submitits_local_executor(t
     assert written["--workers"] == written["--cluster"]
 
 
+def test_a_cluster_job_stopped_at_its_time_limit_runs_again_and_gives_the_same_csv(tmp_path):
+    """On a cluster a job is signalled at its time limit or when preempted (submitit: SIGUSR2)
+    and queued again with what its `checkpoint` returns: the same run, from its start (its
+    log is the experiment's only once it ends). Here one job is signalled in its first update,
+    through submitit's local executor: the experiment still gives the CSV of the runs in one
+    process."""
+    pytest.importorskip("submitit", reason="the cluster path needs submitit (optional)")
+    script, written = tiny(tmp_path, (0,), 512, preempted=True), {}
+    for how in (["--workers", "1"], ["--cluster", tmp_path / "jobs"]):
+        where = tmp_path / how[0].strip("-")
+        where.mkdir()
+        if how[0] == "--workers":  # in this process no run is signalled: as if done already
+            (tmp_path / "preempted").touch()
+        else:
+            (tmp_path / "preempted").unlink()
+        p = run_script(script, *how, timeout=300, cwd=where)
+        assert p.returncode == 0, p.stderr
+        written[how[0]] = (where / "runs" / "experiments" / "tiny.csv").read_bytes()
+    assert (tmp_path / "preempted").exists()  # one job was signalled
+    logs = "".join(log.read_text() for log in (tmp_path / "jobs").rglob("*.out"))
+    assert "this job is timed-out" in logs and "Requeued job" in logs, logs
+    assert written["--workers"] == written["--cluster"]
+
+
 def test_an_experiment_writes_to_runs_experiments_where_it_is_run(tmp_path, monkeypatch):
     """As the scripts' runs/: the folder the command runs in, not the repository's."""
     monkeypatch.chdir(tmp_path)
@@ -410,45 +453,58 @@ def test_an_experiment_writes_to_runs_experiments_where_it_is_run(tmp_path, monk
 def test_the_workers_are_deaf_to_ctrl_c_from_the_first_to_the_last():
     """A terminal's Ctrl-C reaches the workers too: each, the first ones and those the pool
     forks later (from its own thread, one per run), has SIGINT blocked, so that the experiment
-    alone answers it; the experiment's own thread has it back."""
+    alone answers it; the experiment's own thread has it back. SIGTERM, which the experiment
+    turns into a Ctrl-C, ends a worker as by default (the pool ends its workers with it)."""
     code = f"""
 import signal, sys
 sys.path.insert(0, {str(ROOT / "experiments")!r})
+import common
 import lab
 
 
 def blocked(_):
-    return signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    return (signal.SIGINT in mask, signal.SIGTERM in mask,
+            signal.getsignal(signal.SIGTERM) == signal.SIG_DFL)
 
 
-with lab.pool_deaf_to_ctrl_c(1) as pool:
+with common.sigterm_as_ctrl_c(), lab.pool_deaf_to_ctrl_c(1) as pool:
     print(pool.map(blocked, range(3), chunksize=1))  # three workers: one run each
-print(blocked(None))
+    print(blocked(None))
 """
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
-    assert p.stdout.splitlines() == ["[True, True, True]", "False"]
+    assert p.stdout.splitlines() == ["[(True, False, True), (True, False, True), "
+                                     "(True, False, True)]", "(False, False, False)"]
 
 
-@pytest.mark.parametrize("workers", [1, 2])
+# Ctrl-C, and SIGTERM (Slurm's, to every process of the job): (signal, exit code, its name)
+CTRL_C = (signal.SIGINT, 130, "Ctrl-C")
+SIGTERM = (signal.SIGTERM, 143, "SIGTERM")
+
+
+@pytest.mark.parametrize("workers,sent", [(1, CTRL_C), (2, CTRL_C), (2, SIGTERM)],
+                         ids=["1-ctrl_c", "2-ctrl_c", "2-sigterm"])
 def test_ctrl_c_keeps_the_finished_runs_says_so_in_one_line_and_leaves_nothing_else(
-        workers, tmp_path):
+        workers, sent, tmp_path):
     """Ctrl-C, as a terminal sends it (to the workers too), once a run has been kept and
     another is inside its training loop: exit 130, one line that says how many runs are kept
     and how to go on; each kept run whole, the runs cut short not kept, no *.tmp, no
-    temporary folder of ours, no worker process left."""
+    temporary folder of ours, no worker process left. SIGTERM the same, exit 143."""
+    how, exit_code, name = sent
     script, temp = tiny(tmp_path, range(50), 512, saying=True), tmp_path / "temp"
     temp.mkdir()
     code, out, err, left = interrupt_in_a_terminal(script, "--workers", workers,
                                                    after=("original", "update done"),
-                                                   cwd=tmp_path, env={"TMPDIR": str(temp)})
-    assert code == 130, (out, err)
+                                                   cwd=tmp_path, env={"TMPDIR": str(temp)},
+                                                   signal=how)
+    assert code == exit_code, (out, err)
     assert not left  # no worker process outlives the experiment
     record = tmp_path / "runs" / "experiments" / "tiny_runs"
     kept = sorted(record.iterdir())
     assert 1 <= len(kept) < 100
     assert err.strip().splitlines() == [
-        f"interrupted (Ctrl-C): {len(kept)} of 100 runs kept in "
+        f"interrupted ({name}): {len(kept)} of 100 runs kept in "
         f"{Path('runs', 'experiments', 'tiny_runs')}; the same command again goes on from there"]
     for run in kept:  # each whole: 512 steps are two updates of 256, two rows
         assert [p.name for p in run.iterdir()] == ["progress.csv"]
@@ -495,15 +551,18 @@ def test_td3_fixes_variants_turn_off_exactly_one_fix_each():
     assert td3_walker.td_target(r, nd, q1, q2, 0.5).tolist() == [2.5, 2.0]
 
 
-def test_ctrl_c_after_the_last_run_says_all_are_kept(tmp_path):
-    """Ctrl-C once every run is kept (here: while the experiment writes what it adds to its
-    table and figure): one line that says so and how to get the rest, exit 130."""
+@pytest.mark.parametrize("sent", [CTRL_C, SIGTERM], ids=["ctrl_c", "sigterm"])
+def test_ctrl_c_after_the_last_run_says_all_are_kept(tmp_path, sent):
+    """Ctrl-C (or SIGTERM) once every run is kept (here: while the experiment writes what it
+    adds to its table and figure): one line that says so and how to get the rest, exit 130
+    (143)."""
+    how, exit_code, name = sent
     script = tiny(tmp_path, (0,), 256, saying=True)
     code, out, err, left = interrupt_in_a_terminal(script, "--workers", 1, after="writing more",
-                                                   cwd=tmp_path)
-    assert code == 130 and not left, (out, err)
+                                                   cwd=tmp_path, signal=how)
+    assert code == exit_code and not left, (out, err)
     assert err.strip().splitlines() == [
-        f"interrupted (Ctrl-C): all 2 runs kept in {Path('runs', 'experiments', 'tiny_runs')}; "
+        f"interrupted ({name}): all 2 runs kept in {Path('runs', 'experiments', 'tiny_runs')}; "
         "the same command again draws the table and the figure from them"]
     assert not list(tmp_path.rglob("*.tmp*"))
 

@@ -1,8 +1,8 @@
-"""Ctrl-C anywhere and bad input, for every script: one line, and the exit code the README
-states (130 for Ctrl-C, 2 for bad input), the last good files kept, no *.tmp, no half-made
-run folder. To interrupt at an exact point (an import, the middle of a file write), the child
-interrupts itself there: a sitecustomize.py on its PYTHONPATH patches the module in question
-as it is imported. Nothing here waits on the clock."""
+"""Ctrl-C anywhere and bad input, for every script: one line, and the exit code
+docs/running.md states (130 for Ctrl-C, 143 for SIGTERM, 2 for bad input), the last good files
+kept, no *.tmp, no half-made run folder. To interrupt at an exact point (an import, the middle
+of a file write), the child interrupts itself there: a sitecustomize.py on its PYTHONPATH
+patches the module in question as it is imported. Nothing here waits on the clock."""
 
 import csv
 import importlib
@@ -59,26 +59,33 @@ def one_line(stderr, needle):
     return "Traceback" not in stderr and len(lines) == 1 and needle in lines[0]
 
 
-# --- Ctrl-C --------------------------------------------------------------------------------
+# --- Ctrl-C, and SIGTERM (kill PID), which does what Ctrl-C does ------------------------------
 
-def test_ctrl_c_while_mujoco_is_imported_is_no_missing_package(tmp_path):
+# (the signal the child sends itself, its exit code, its one line)
+SIGNALS = [pytest.param(("SIGINT", 130, "interrupted (Ctrl-C)"), id="ctrl_c"),
+           pytest.param(("SIGTERM", 143, "interrupted (SIGTERM)"), id="sigterm")]
+
+
+@pytest.mark.parametrize("sent", SIGNALS)
+def test_ctrl_c_while_mujoco_is_imported_is_no_missing_package(tmp_path, sent):
     """A Ctrl-C inside MuJoCo's C import comes out of gym.make as DependencyNotInstalled from
     ImportError("initialization failed") from KeyboardInterrupt: it is a Ctrl-C."""
-    env = hooked(tmp_path, '''
+    name, code, line = sent
+    env = hooked(tmp_path, f'''
         class CtrlC:
             def find_spec(self, name, path=None, module=None):
                 if name == "mujoco":
                     sys.meta_path.remove(self)
                     try:
-                        signal.raise_signal(signal.SIGINT)
+                        signal.raise_signal(signal.{name})
                     except KeyboardInterrupt as e:  # what MuJoCo's C import turns it into
                         raise ImportError("initialization failed") from e
         sys.meta_path.insert(0, CtrlC())
     ''')
     p = run_script("ppo_cartpole.py", "--env-id", "Walker2d-v5", "--run-dir", tmp_path, env=env,
                    timeout=120)
-    assert p.returncode == 130, p.stderr
-    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    assert p.returncode == code, p.stderr
+    assert one_line(p.stderr, line), p.stderr
     assert run_folders(tmp_path) == []
 
 
@@ -88,11 +95,13 @@ def test_ctrl_c_while_mujoco_is_imported_is_no_missing_package(tmp_path):
 ONE = ["ppo_cartpole"]
 
 
+@pytest.mark.parametrize("sent", SIGNALS)
 @pytest.mark.parametrize("script", ONE)
-def test_ctrl_c_in_the_middle_of_writing_model_pt(script, tmp_path):
+def test_ctrl_c_in_the_middle_of_writing_model_pt(script, tmp_path, sent):
     """torch.save cut short raised RuntimeError("... unexpected pos") and left model.pt.tmp:
-    now the write finishes, then the Ctrl-C ends the run."""
-    env = hooked(tmp_path, '''
+    now the write finishes, then the Ctrl-C (or SIGTERM) ends the run."""
+    name, code, line = sent
+    env = hooked(tmp_path, f'''
         def patch(torch):
             real_save = torch.save
             def save(obj, f, *args, **kwargs):
@@ -101,7 +110,7 @@ def test_ctrl_c_in_the_middle_of_writing_model_pt(script, tmp_path):
                     def write(self, data):
                         HalfWay.writes += 1
                         if HalfWay.writes == 3:
-                            signal.raise_signal(signal.SIGINT)
+                            signal.raise_signal(signal.{name})
                         return f.write(data)
                     def __getattr__(self, name):
                         return getattr(f, name)
@@ -112,28 +121,30 @@ def test_ctrl_c_in_the_middle_of_writing_model_pt(script, tmp_path):
     ''')
     p = run_script(f"{script}.py", "--run-dir", tmp_path, "--no-gifs", *QUICK, env=env,
                    timeout=300)
-    assert p.returncode == 130, p.stderr
-    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    assert p.returncode == code, p.stderr
+    assert one_line(p.stderr, line), p.stderr
     (run,) = run_folders(tmp_path)
     assert torch.load(run / "model.pt", weights_only=True)["global_step"] == 512
     assert not list(run.glob("*.tmp*"))
 
 
-def test_ctrl_c_while_a_gif_is_written(tmp_path):
-    """The GIF being written is finished, then the Ctrl-C ends the run."""
-    env = hooked(tmp_path, '''
+@pytest.mark.parametrize("sent", SIGNALS)
+def test_ctrl_c_while_a_gif_is_written(tmp_path, sent):
+    """The GIF being written is finished, then the Ctrl-C (or SIGTERM) ends the run."""
+    name, code, line = sent
+    env = hooked(tmp_path, f'''
         def patch(v2):
             real = v2.mimsave
             def mimsave(path, *args, **kwargs):
                 if str(path).endswith("after.gif.tmp"):
-                    signal.raise_signal(signal.SIGINT)
+                    signal.raise_signal(signal.{name})
                 return real(path, *args, **kwargs)
             v2.mimsave = mimsave
         after_import("imageio.v2", patch)
     ''')
     p = run_script("ppo_cartpole.py", "--run-dir", tmp_path, *QUICK, env=env, timeout=300)
-    assert p.returncode == 130, p.stderr
-    assert one_line(p.stderr, "interrupted (Ctrl-C)"), p.stderr
+    assert p.returncode == code, p.stderr
+    assert one_line(p.stderr, line), p.stderr
     (run,) = run_folders(tmp_path)
     assert len(iio.imread(run / "after.gif", index=None)) > 1  # whole, every frame
     assert not list(run.glob("*.tmp*"))

@@ -1,6 +1,6 @@
 """Unit tests of the tools the scripts call (cli.py, runlog.py, checkpoints.py, report.py and
 the last part of common.py): flags, run folders, CSV rows, checkpoints, one-line errors,
-Ctrl-C, the divergence check and the run's episode bookkeeping."""
+Ctrl-C and SIGTERM, the divergence check and the run's episode bookkeeping."""
 
 import csv
 import dataclasses
@@ -245,6 +245,8 @@ def test_save_checkpoint_is_on_disk_whole_before_it_takes_its_name(tmp_path, mon
     # torch.save cut short by Ctrl-C; MuJoCo's import cut short by it, as gym.make reports it
     ("raise RuntimeError('unexpected pos') from KeyboardInterrupt()", 130,
      "\ninterrupted (Ctrl-C)\n"),
+    # `kill PID`: SIGTERM does what Ctrl-C does, and says which came
+    ("import signal; signal.raise_signal(signal.SIGTERM)", 143, "\ninterrupted (SIGTERM)\n"),
     ("raise RuntimeError('a bug, no Ctrl-C in it')", 1, None),  # stays a traceback
 ])
 def test_clear_exit_prints_one_line(tmp_path, body, code, stderr):
@@ -316,22 +318,65 @@ def ctrl_c_raises():
 
 
 @pytest.mark.quick
+@pytest.mark.parametrize("sent", ["SIGINT", "SIGTERM"])
 def test_ctrl_c_during_save_checkpoint_waits_for_the_whole_file(tmp_path, monkeypatch,
-                                                                ctrl_c_raises):
+                                                                ctrl_c_raises, sent):
+    """Ctrl-C, or SIGTERM as main() receives it (common.sigterm_as_ctrl_c)."""
     import signal
 
     real_save = torch.save
 
-    def save(obj, f):  # Ctrl-C as torch.save starts
-        signal.raise_signal(signal.SIGINT)
+    def save(obj, f):  # the signal as torch.save starts
+        signal.raise_signal(getattr(signal, sent))
         real_save(obj, f)
 
     monkeypatch.setattr(checkpoints.torch, "save", save)
-    with pytest.raises(KeyboardInterrupt):  # it still arrives, once the file is whole
-        checkpoints.save_checkpoint(dict(w=torch.arange(5.0)), tmp_path / "m.pt")
+    with common.sigterm_as_ctrl_c(), pytest.raises(KeyboardInterrupt):  # it still arrives,
+        checkpoints.save_checkpoint(dict(w=torch.arange(5.0)), tmp_path / "m.pt")  # once whole
     monkeypatch.undo()
     assert torch.equal(checkpoints.load_checkpoint(tmp_path / "m.pt")["w"], torch.arange(5.0))
     assert [p.name for p in tmp_path.iterdir()] == ["m.pt"]
+    assert common.stopped_by() == {"SIGINT": ("Ctrl-C", 130), "SIGTERM": ("SIGTERM", 143)}[sent]
+
+
+@pytest.mark.quick
+def test_sigterm_stops_a_training_loop_at_a_whole_step_as_ctrl_c_does(ctrl_c_raises):
+    """Under sigterm_as_ctrl_c, a first SIGTERM only marks the loop to stop (CtrlC.pressed),
+    a second ends it at once; after the block SIGTERM's handler is what it was."""
+    import signal
+
+    before = signal.getsignal(signal.SIGTERM)
+    steps = []
+    with common.sigterm_as_ctrl_c():
+        with checkpoints.CtrlC() as ctrl_c:
+            for step in range(5):
+                steps.append(step)
+                if step == 1:
+                    signal.raise_signal(signal.SIGTERM)  # the step goes on to its end
+                    steps.append("whole")
+                if ctrl_c.pressed:
+                    break
+        assert steps == [0, 1, "whole"] and ctrl_c.pressed
+        with checkpoints.CtrlC() as ctrl_c:
+            signal.raise_signal(signal.SIGTERM)
+            signal.raise_signal(signal.SIGTERM)  # the second: at once
+            steps.append("not reached")
+        assert steps[-1] == "whole" and ctrl_c.pressed
+    assert common.stopped_by() == ("SIGTERM", 143)
+    assert signal.getsignal(signal.SIGTERM) == before
+
+
+@pytest.mark.quick
+def test_ctrl_c_ignored_at_start_works_under_sigterm_as_ctrl_c(ctrl_c_raises):
+    """A shell script's `cmd &` starts its job with SIGINT ignored: within the block `kill -INT`
+    is a Ctrl-C again; after it, ignored as it was."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    with common.sigterm_as_ctrl_c(), pytest.raises(KeyboardInterrupt):
+        signal.raise_signal(signal.SIGINT)
+    assert common.stopped_by() == ("Ctrl-C", 130)
+    assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
 
 
 @pytest.mark.quick
