@@ -96,8 +96,9 @@ class Config(cli.SolvedFlags):
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
-        cli.check_ranges(self, seed=">= 0", total_timesteps="> 0", episodes_per_update="> 0", hidden="> 0",
-                         learning_rate="> 0", vf_learning_rate="> 0", gamma="(0, 1]")
+        cli.check_ranges(self, seed=">= 0", total_timesteps="> 0", episodes_per_update="> 0",
+                         hidden="> 0", learning_rate="> 0", vf_learning_rate="> 0",
+                         gamma="(0, 1]")
 
 
 # ==== Returns, loss and what the baseline does ============================================
