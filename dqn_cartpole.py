@@ -120,11 +120,9 @@ class Config(cli.SolvedFlags):
             learning_rate="> 0", gamma="(0, 1]", train_freq="> 0", gradient_steps="> 0",
             target_update_interval="> 0", eps_start="[0, 1]", eps_end="[0, 1]",
             exploration_steps="> 0", max_grad_norm=">= 0", q_check_every="> 0")
-        cli.check(self.start_steps >= self.batch_size,
-                  f"--start-steps must be at least --batch-size ({self.batch_size}), "
-                  f"got {self.start_steps}")
-        cli.check(self.buffer_size >= self.start_steps, f"--buffer-size ({self.buffer_size}) must "
-                  f"hold the warm-up's --start-steps ({self.start_steps}) transitions")
+        cli.check(self.batch_size <= self.start_steps <= self.buffer_size, f"--start-steps "
+                  f"({self.start_steps}) must lie between --batch-size ({self.batch_size}) and "
+                  f"--buffer-size ({self.buffer_size}): a whole first batch, all kept in the buffer")
         cli.check(self.total_timesteps > self.start_steps,
                   f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
                   f"({self.start_steps}): learning starts after the warm-up")

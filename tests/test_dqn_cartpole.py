@@ -151,7 +151,7 @@ def test_its_maps_are_titled_max_q_and_the_greedy_action(tmp_path):
                                   ["--buffer-size", "500"]])  # the warm-up's 1000 do not fit
 def test_a_buffer_smaller_than_the_warm_up_is_refused_in_one_line(args, tmp_path, capsys):
     p = run_main("dqn_cartpole.py", *args, "--run-dir", tmp_path, capsys=capsys)
-    assert p.returncode == 2 and "--buffer-size" in p.stderr, p.stderr
+    assert p.returncode == 2 and "must lie between --batch-size" in p.stderr, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and not any(tmp_path.iterdir())
 
 
