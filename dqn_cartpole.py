@@ -122,7 +122,7 @@ class Config(cli.SolvedFlags):
             exploration_steps="> 0", max_grad_norm=">= 0", q_check_every="> 0")
         cli.check(self.batch_size <= self.start_steps <= self.buffer_size, f"--start-steps "
                   f"({self.start_steps}) must lie between --batch-size ({self.batch_size}) and "
-                  f"--buffer-size ({self.buffer_size}): a whole first batch, all kept in the buffer")
+                  f"--buffer-size ({self.buffer_size}): a whole first batch, all in the buffer")
         cli.check(self.total_timesteps > self.start_steps,
                   f"--total-timesteps ({self.total_timesteps}) must exceed --start-steps "
                   f"({self.start_steps}): learning starts after the warm-up")
