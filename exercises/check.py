@@ -1345,8 +1345,8 @@ def reinforce_mistakes(policy, value_net, data, baseline):
     return [
         (tr("the sign: +mean(log pi * weights) where the loss is its negative (descending it "
             "would make the actions taken\n    less likely the better they did)",
-            "符号反了：损失应该是 -mean(log π * 权重)（对正号的那个做梯度下降，动作做得越好，"
-            "\n    反而越不可能再被选中）"), (-right[0], right[1], right[2])),
+            "符号反了：损失应该是 -mean(log π * 权重)（如果对不带负号的式子做梯度下降，"
+            "\n    回报越高的动作反而越不容易再被选中）"), (-right[0], right[1], right[2])),
         (tr("a sum over the batch (.sum()) where the script takes the mean (.mean()): the step "
             "then grows with the batch's length\n    (longer episodes, bigger steps, at the same "
             "step size)", "对这批数据求了和（.sum()），脚本求的是均值（.mean()）：这样每一步的大小"
@@ -1386,12 +1386,12 @@ def reinforce_mistakes(policy, value_net, data, baseline):
 def reinforce_gradient_mistake(loss, kind):
     """The mistake a gradient failure of `loss` ("loss_pi" or "loss_v") shows, or ''."""
     if loss == "loss_pi" and kind == "stray":
-        return tr("V(s_t) not detached in the weight G_t - V(s_t): pi's loss then trains V too "
-                  "(toward making G_t - V(s_t) large,\n    not toward G_t), beside loss_v: "
-                  "values.detach() in the weight, values as they are in loss_v",
-                  "权重 G_t - V(s_t) 里的 V(s_t) 没有 detach：这样 π 的损失也会训练 V（把 G_t - V(s_t) "
-                  "往大里推，\n    而不是让 V 拟合 G_t），和 loss_v 一起：权重里用 values.detach()，"
-                  "loss_v 里用 values 本身")
+        return tr("V(s_t) not detached in the weight G_t - V(s_t): pi's loss then trains V too, "
+                  "pushing every V(s_t) up\n    (by -log pi(a_t|s_t) >= 0, whatever G_t is), not "
+                  "toward G_t: values.detach() in the weight, values as they are in loss_v",
+                  "权重 G_t - V(s_t) 里的 V(s_t) 没有 detach：这样 π 的损失也会训练 V，不管 G_t 是多少，"
+                  "\n    都把每个 V(s_t) 往上推（力度是 -log π(a_t|s_t) >= 0），而不是让 V 拟合 G_t："
+                  "权重里用 values.detach()，loss_v 里用 values 本身")
     if loss == "loss_pi" and kind == "cut":
         return tr("log pi(a|s) computed without a gradient (torch.no_grad(), .detach() or "
                   ".item()): pi would never move", "log π(a|s) 是在不带梯度的情况下算的"
