@@ -65,7 +65,7 @@ class OutputFlags:
 
     def __post_init__(self):
         check(not self.tensorboard or plots.tensorboard_installed(), plots.NO_TENSORBOARD)
-        check_ranges(self, print_every="> 0", eval_episodes="> 0", threads="> 0")
+        check_ranges(self, print_every="> 0", eval_episodes="> 0", eval_seed=">= 0", threads="> 0")
         check(not self.gif or self.eval, "--gif writes a GIF of a saved policy: it needs --eval")
         check(not self.gif or self.gif.lower().endswith(".gif"),
               f"--gif writes a GIF: give a file name that ends in .gif, got {self.gif}")

@@ -125,3 +125,15 @@ def test_reinforce_solves_cartpole_with_its_defaults(tmp_path):
     result = rf.train(rf.Config(run_dir=str(tmp_path), gifs=False, curves=False,
                                 print_every=10**6))
     assert result["solved"] and np.mean(result["eval_returns"]) >= 475, result["solved_step"]
+
+
+@pytest.mark.parametrize("script", ["reinforce_cartpole.py", "q_learning_cliffwalking.py"])
+@pytest.mark.parametrize("flag", ["--seed", "--eval-seed"])
+def test_a_negative_seed_is_refused_in_one_line(script, flag, tmp_path, capsys):
+    """gymnasium refuses a negative seed with a traceback (or, through the env check, as an
+    'unknown environment'); the flags say so first, in one line, before any folder is made."""
+    from conftest import run_main
+
+    p = run_main(script, flag, "-1", "--run-dir", tmp_path, capsys=capsys)
+    assert p.returncode == 2 and f"{flag} must be >= 0" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and not any(tmp_path.iterdir())
