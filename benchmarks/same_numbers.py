@@ -49,6 +49,12 @@ CASES = {
     **{f"dqn_cartpole{flag}": ("dqn_cartpole.py", [
         "--seed", "0", "--total-timesteps", "6000", *([flag] if flag else []),
         "--eval-episodes", "3", "--no-gifs", "--no-curves"]) for flag in ("", "--double")},
+    # where the path begins: REINFORCE with and without its baseline, both tabular agents
+    **{f"reinforce_cartpole{flag}": ("reinforce_cartpole.py", ["--seed", "0", *CARTPOLE,
+                                                               *([flag] if flag else [])])
+       for flag in ("", "--no-baseline")},
+    "q_learning_cliffwalking": ("q_learning_cliffwalking.py", [
+        "--seed", "0", "--total-episodes", "200", "--no-gifs", "--no-curves"]),
     # the language-model scripts: every phase, a few steps each
     "grpo_addition_short": ("grpo_addition.py", [
         "--digits", "1", "--sft-steps", "30", "--grpo-steps", "10", "--eval-prompts", "50",
