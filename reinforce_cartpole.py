@@ -126,7 +126,7 @@ def reinforce_loss(policy, value_net, data, baseline):
     obs, act, ret = data["obs"], data["act"], data["ret"]
     values = value_net(obs)
     # The weight of each step: G_t, or G_t - V(s_t) with the baseline. V is a constant here
-    # (detached): it must not move with pi's gradient, or the loss would train it to cancel G.
+    # (detached): pi's loss must not train V (it would push every V(s_t) up, whatever G_t).
     weights = ret - values.detach() if baseline else ret
     # grad J = E[sum_t grad log pi(a_t|s_t) * (G_t - b(s_t))]  (Williams 1992; Sutton & Barto
     # 2018, 13.3-13.4), descended as its negative; a mean, so long episodes take no longer steps
