@@ -6,7 +6,9 @@ the same logs, and Ctrl-C ending in one line with exit 130 and its files kept (S
 exit 143; and `kill -INT` where the run started with SIGINT ignored, as `cmd &` starts it).
 
 A new script is one new file: if it crashes while drawing, forgets to declare SMOKE or a
-column, or leaves a *.tmp behind, these tests fail in the quick layer (pytest -m quick).
+column, or leaves a *.tmp behind, these tests fail in the quick layer (pytest -m quick). Its
+numbers (its defaults, its smoke run's first logged rows) are held to those recorded in
+tests/fingerprints.json once `python tests/fingerprints.py --accept NAME` has recorded them.
 """
 
 import re
@@ -17,22 +19,14 @@ import signal
 import imageio.v3 as iio
 import pytest
 
-from conftest import ROOT, interrupt, run_main, run_script
-
-SCRIPTS = sorted(p.stem for p in ROOT.glob("*.py") if "\ndef train(" in p.read_text("utf-8"))
-LOGS = ("progress.csv", "evaluations.csv", "episodes.csv")
+import fingerprints
+from conftest import interrupt, run_main, run_script
+from fingerprints import LOGS, SCRIPTS, quick_smoke, smoke
 
 
 @pytest.fixture(params=SCRIPTS)
 def script(request):
     return importlib.import_module(request.param)
-
-
-def smoke(module, tmp_path, **more):
-    assert hasattr(module, "SMOKE"), (f"{module.__name__}.py declares no SMOKE: the Config "
-                                      "overrides of a run of seconds that writes every file")
-    return module.Config(**{**module.SMOKE, "run_dir": str(tmp_path), "print_every": 10**6,
-                            **more})
 
 
 def as_flags(overrides):
@@ -83,11 +77,26 @@ def test_bad_input_is_one_line_and_exit_2(script, flags, needle, capsys, tmp_pat
 
 
 @pytest.mark.quick
+def test_config_defaults_are_their_fingerprints(script):
+    """Every field's default as tests/fingerprints.json records it: a default that the SMOKE run
+    overrides (DDPG's warm-up, its buffer size) moves no smoke number, yet every real run's."""
+    moved = fingerprints.moved(script.__name__, "defaults", fingerprints.defaults(script))
+    assert not moved, fingerprints.message(script.__name__, moved)
+
+
+@pytest.mark.quick
 def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
+    """Its files, pictures and --eval replay, and its fingerprint: the numbers of its logs'
+    first two rows that tests/fingerprints.json records, integers exact, floats within 1e-3 of
+    the larger of the two values or of their column's largest recorded value (a loss that
+    cancels to 3e-05 carries its column's noise). A shifted initialisation or default moved
+    them by 0.6% or more; another machine's float order (SIMD width, BLAS) by under 1e-4 where
+    it was tried, and 1e-6 of noise on every initial weight moved none: such differences grow
+    only later in a run, once a sampled action or a clipped ratio flips."""
     # no GIFs here (seconds of the quick layer): test_same_seed_same_logs checks them
-    no_gifs = {} if "gifs" in getattr(script.Config, "UNUSED_FLAGS", ()) else {"gifs": False}
-    result = script.train(smoke(script, tmp_path, **no_gifs))
+    result = script.train(quick_smoke(script, tmp_path))
     run = result["run_dir"]
+    numbers = fingerprints.logged(run)
     assert run.parent == tmp_path and run.name.startswith(f"{script.__name__}__")
     names = {p.name for p in run.iterdir()}
     assert "model.pt" in names and names & set(LOGS), names
@@ -102,6 +111,8 @@ def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
     p = run_main(f"{script.__name__}.py", "--eval", run, *episodes, capsys=capsys)
     assert p.returncode == 0, p.stderr
     assert p.stdout.strip(), "--eval printed nothing"
+    moved = fingerprints.moved(script.__name__, "smoke", numbers)
+    assert not moved, fingerprints.message(script.__name__, moved)
 
 
 @pytest.mark.slow
