@@ -14,7 +14,7 @@ from pathlib import Path
 
 import torch
 
-from common import UserError, written_whole
+from common import UserError, check_writable, written_whole
 
 def save_checkpoint(obj, path):
     """torch.save, flushed to disk, written whole."""
@@ -89,6 +89,9 @@ def config_to_resume(cfg, script):
     path = Path(cfg.resume) / "checkpoint.pt"
     if not path.exists() and (Path(cfg.resume) / "model.pt").exists():  # whose run is it?
         load_checkpoint(Path(cfg.resume) / "model.pt", script=script)  # another's: says so
+    if path.exists():  # a read-only folder fails now, in one line
+        check_writable(path.parent, "--resume goes on in the run's folder", "resume a writable "
+                       "copy of it (--eval only reads it)")
     saved = load_checkpoint(path, required=("config", "global_step", "buffer"), script=script)
     may_change = type(cfg).MAY_CHANGE_ON_RESUME
     defaults = {f.name: f.default for f in dataclasses.fields(cfg)}

@@ -21,7 +21,8 @@ import torch
 
 import help_zh
 import plots
-from common import UserError, from_ctrl_c, headless, sigterm_as_ctrl_c, stopped_by
+from common import (UserError, check_writable, from_ctrl_c, headless, sigterm_as_ctrl_c,
+                    stopped_by)
 
 
 @dataclass
@@ -69,6 +70,8 @@ class OutputFlags:
         check(not self.gif or self.eval, "--gif writes a GIF of a saved policy: it needs --eval")
         check(not self.gif or self.gif.lower().endswith(".gif"),
               f"--gif writes a GIF: give a file name that ends in .gif, got {self.gif}")
+        if self.gif:  # a folder that is missing or read-only: now, not after the episode
+            check_writable(Path(self.gif).parent, f"--gif {self.gif}")
 
 
 @dataclass

@@ -13,6 +13,7 @@ import math
 import os
 import signal
 import sys
+import tempfile
 from pathlib import Path
 
 import gymnasium as gym
@@ -319,7 +320,7 @@ def make_continuous_env(env_id):
 
 # =============================================================================
 # Tools the other modules build on: one-line errors, headless rendering, SIGTERM as Ctrl-C,
-# whole-file writes
+# whole-file writes and the check that a folder takes them
 # =============================================================================
 
 
@@ -443,4 +444,20 @@ def written_whole(path):
         except OSError as e:
             raise UserError(f"cannot write {path}: {e.strerror or e}") from None
         finally:
-            tmp.unlink(missing_ok=True)
+            with contextlib.suppress(OSError):  # a read-only folder: no .tmp, and the line says so
+                tmp.unlink(missing_ok=True)
+
+
+def check_writable(folder, what, then=""):
+    """One UserError, before any long work, unless files can be written into `folder`: it exists
+    and is not read-only. A write is tried (an unnamed temporary file: nothing is left there).
+    `what` starts the line (the flag), `then` ends it (what to do instead)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise UserError(f"{what}: no folder {folder} (create it first)")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as e:
+        raise UserError(f"{what}: cannot write into {folder}: {e.strerror or e}"
+                        + (f"; {then}" if then else "")) from None

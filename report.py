@@ -83,9 +83,10 @@ def draw_logged(run, pictures):
         interrupted_at(run, run.global_step, "--eval uses its model.pt, as training left it")
 
 
-def interrupted_at(run, step, then):
-    """The last line after a Ctrl-C: the step, the files the run folder holds, what next."""
-    print(f"\ninterrupted at step {step}: {run.dir} holds "
+def interrupted_at(run, step, then, when=""):
+    """The last line after a Ctrl-C: the step (and `when`), the files the run folder holds,
+    what next."""
+    print(f"\ninterrupted at step {step}{when}: {run.dir} holds "
           f"{', '.join(sorted(f.name for f in run.dir.iterdir()))} "
           f"({then}: python {run.script}.py --eval {run.dir})", flush=True)
 
@@ -114,22 +115,27 @@ def finish_updates(run, threshold, play, before, pictures, maps=None):
            f"{cfg.total_timesteps} make no whole one)" if short > 0 else "")
     print(f"trained {step} steps{why}, {len(run.episodes)} episodes in {elapsed:.1f}s; "
           f"model: {run_dir / 'model.pt'}", flush=True)
-    if cfg.curves:
-        with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
-            curve, inside = draw_pictures(run, pictures, top, maps and maps())
-            print(f"curve: {curve}\ninside: {inside}", flush=True)
-    if cfg.tensorboard:
-        plots.to_tensorboard(run_dir, sps=step / elapsed, tags=run.tags)
-    # The evaluations, each of the same episode seeds, one per way of acting
-    n, seed = cfg.eval_episodes, cfg.eval_seed
-    for i, (key, what, act_of) in enumerate(play):
-        result[key] = returns = common.evaluate(cfg.env_id, act_of(seed), n, seed)
-        print(f"{'greedy ' if i else ''}evaluation over {n} episodes, {what}: mean "
-              f"{np.mean(returns):.1f}, min {min(returns):.0f}", flush=True)
-    if cfg.gifs:  # one episode each, acting as play[0]: after.gif shows the evaluation's first
-        for name, act_of in (("before.gif", before[0][2]), ("after.gif", play[0][2])):
-            ret = common.record_gif(cfg.env_id, act_of(seed), run_dir / name, seed, **GIF)
-            print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+    try:  # a late Ctrl-C too ends with the line that says where the model is
+        if cfg.curves:
+            with common.ctrl_c_deferred():  # Ctrl-C waits until the pictures are whole
+                curve, inside = draw_pictures(run, pictures, top, maps and maps())
+                print(f"curve: {curve}\ninside: {inside}", flush=True)
+        if cfg.tensorboard:
+            plots.to_tensorboard(run_dir, sps=step / elapsed, tags=run.tags)
+        # The evaluations, each of the same episode seeds, one per way of acting
+        n, seed = cfg.eval_episodes, cfg.eval_seed
+        for i, (key, what, act_of) in enumerate(play):
+            result[key] = returns = common.evaluate(cfg.env_id, act_of(seed), n, seed)
+            print(f"{'greedy ' if i else ''}evaluation over {n} episodes, {what}: mean "
+                  f"{np.mean(returns):.1f}, min {min(returns):.0f}", flush=True)
+        if cfg.gifs:  # an episode each, acting as play[0]: after.gif, the evaluation's first
+            for name, act_of in (("before.gif", before[0][2]), ("after.gif", play[0][2])):
+                ret = common.record_gif(cfg.env_id, act_of(seed), run_dir / name, seed, **GIF)
+                print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+    except KeyboardInterrupt:  # main() then exits with 130 (143 after a SIGTERM)
+        result["interrupted"] = True
+        interrupted_at(run, step, "replay", ", after training, before its evaluation and "
+                       "GIFs were done")
     return result
 
 
@@ -153,6 +159,8 @@ def after_evaluation(run, actor, best, device, info, pictures, gif=GIF):
         if cfg.gifs:
             common.record_gif(cfg.env_id, common.deterministic(actor, device),
                               run.dir / "best.gif", cfg.eval_seed, **gif)
+        else:  # resumed with --no-gifs: a best.gif would show an earlier best
+            (run.dir / "best.gif").unlink(missing_ok=True)
     if cfg.curves:  # rewritten at every evaluation: open them any time
         draw_pictures(run, pictures, plots.evaluation_returns())
     if cfg.tensorboard:
@@ -187,11 +195,17 @@ def finish_evaluations(run, global_step, interrupted, untrained, actor, device, 
     print(f"learning phase: {learned} steps at {rate:.1f} steps/s (updates and evaluations "
           f"included); model: {run.dir / 'model.pt'} (step {global_step}); run folder: "
           f"{run.dir}", flush=True)
-    if run.cfg.gifs:
-        for name, net in (("before.gif", untrained), ("after.gif", actor)):
-            ret = common.record_gif(run.cfg.env_id, common.deterministic(net, device),
-                                    run.dir / name, run.cfg.eval_seed, **gif)
-            print(f"{name}: return {ret:.0f} -> {run.dir / name}", flush=True)
+    try:  # a late Ctrl-C too ends with the line that says where the model is
+        if run.cfg.gifs:
+            for name, net in (("before.gif", untrained), ("after.gif", actor)):
+                ret = common.record_gif(run.cfg.env_id, common.deterministic(net, device),
+                                        run.dir / name, run.cfg.eval_seed, **gif)
+                print(f"{name}: return {ret:.0f} -> {run.dir / name}", flush=True)
+    except KeyboardInterrupt:  # main() then exits with 130 (143 after a SIGTERM)
+        result["interrupted"] = True
+        print(f"interrupted at step {global_step}, after training, while its before and after "
+              f"GIFs were recorded: {run.dir / 'model.pt'} holds the trained actor (replay: "
+              f"python {run.script}.py --eval {run.dir})", flush=True)
     return result
 
 

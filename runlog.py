@@ -13,7 +13,8 @@ import numpy as np
 import torch
 
 import checkpoints
-from common import UserError
+import plots
+from common import UserError, written_whole
 
 
 def make_run_dir(root, script, env_id, seed):
@@ -206,13 +207,19 @@ class UpdateLog:
                                        self.global_step, nets, **info)
 
 
+# What an evaluation writes besides evaluations.csv's row (report.after_evaluation):
+# checkpoint.pt keeps a copy, which --resume puts back in place of those of later evaluations.
+EVALUATION_FILES = ("model.pt", "best.pt", "best.gif", "curve.png", "inside.png")
+
+
 class EvaluationLog:
     """The run folder of a script that evaluates every so many env steps: episodes.csv as
     episodes end, evaluations.csv (a row per evaluation: its mean and std, the training
     return before it, then the script's own columns, declared once in `logged` as for
     UpdateLog), progress lines with steps/s of learning (from step `learning_starts` on) and
     the time left. With cfg.resume, the folder of that run; its state_dict() goes into
-    checkpoint.pt (every row as written), load_state_dict() rewinds the logs to it.
+    checkpoint.pt (every row as written, a copy of the files its evaluations wrote),
+    load_state_dict() rewinds the logs and those files to it.
     `shipped`: a trained model of the script to point to while this one trains, if any."""
 
     def __init__(self, script, cfg, device, logged, learning_starts, eval_every, shipped=None):
@@ -298,12 +305,18 @@ class EvaluationLog:
         return best
 
     def state_dict(self):
+        """The rows, the run's clock, and a copy of what the evaluations wrote besides the rows
+        (EVALUATION_FILES, as they are now: bytes)."""
+        files = {name: torch.from_numpy(np.frombuffer((self.dir / name).read_bytes(),
+                                                      np.uint8).copy())
+                 for name in EVALUATION_FILES if (self.dir / name).exists()}
         return dict(episodes=self.episodes, evaluations=self.evaluations,
-                    elapsed=time.time() - self.timer["start"])
+                    elapsed=time.time() - self.timer["start"], files=files)
 
     def load_state_dict(self, state):
         """The logs as they were at the checkpoint: rows a killed run wrote after it go (the
-        resumed run writes them again, identically); the run's clock goes on from there."""
+        resumed run writes them again, identically), and so do the files of its evaluations
+        past the checkpoint (put back as they were); the run's clock goes on from there."""
         self.episodes[:], self.evaluations[:] = state["episodes"], state["evaluations"]
         ours = {"global_step", "eval_mean", "eval_std", "episodes", "train_return_mean10",
                 *self.logged}  # evaluation()'s columns
@@ -315,11 +328,45 @@ class EvaluationLog:
         self.timer["start"] -= state["elapsed"]
         for stale in self.dir.glob("*.tmp*"):  # a write that a kill cut short
             stale.unlink()
+        path = self.dir / "evaluations.csv"
+        on_disk = len(path.read_text().splitlines()[1:]) if path.exists() else 0
         for name, rows in (("episodes.csv", [episode_row(*e) for e in self.episodes]),
                            ("evaluations.csv", self.evaluations)):
             (self.dir / name).unlink(missing_ok=True)
             for row in rows:
                 append_csv(self.dir / name, row)
+        if "files" in state:
+            self.put_back(state["files"])
+        else:  # a checkpoint of an older version, without copies
+            self.forget_the_future(cut=on_disk > len(self.evaluations))
+        if self.cfg.tensorboard:  # its scalars, from the rows as they are now
+            plots.to_tensorboard(self.dir, tags=self.tags)
+
+    def put_back(self, files):
+        """EVALUATION_FILES as they were at the checkpoint (`files`: their bytes); one that
+        `files` lacks was first written past the checkpoint, and goes."""
+        for name in EVALUATION_FILES:
+            if name in files:
+                with written_whole(self.dir / name) as tmp:
+                    tmp.write_bytes(files[name].numpy().tobytes())
+            else:
+                (self.dir / name).unlink(missing_ok=True)
+
+    def forget_the_future(self, cut):
+        """Without copies: the pictures go if rows past the checkpoint were `cut`, and best.pt
+        and best.gif if best.pt is of an evaluation past it (the next evaluations write them
+        again); model.pt stays (the newest actor)."""
+        gone = ["curve.png", "inside.png"] if cut else []
+        best = self.dir / "best.pt"
+        steps = {row["global_step"] for row in self.evaluations}
+        if best.exists() and torch.load(best, weights_only=True)["global_step"] not in steps:
+            gone += ["best.pt", "best.gif"]
+        gone = [name for name in gone if (self.dir / name).exists()]
+        for name in gone:
+            (self.dir / name).unlink()
+        if gone:
+            print(f"{', '.join(gone)}: of evaluations past the checkpoint, removed (a checkpoint "
+                  "of an older version keeps no copy of them)", flush=True)
 
 
 def episode_row(step, ep_return):

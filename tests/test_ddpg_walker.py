@@ -2,6 +2,7 @@
 on Walker2d-v5, reproducibility, reloading, clear errors, and learning on a cheap task."""
 
 import csv
+import io
 import os
 import subprocess
 import sys
@@ -366,6 +367,12 @@ def assert_same_run(a, b):
         ckpt["log"].pop("elapsed")
         ckpt["config"].pop("resume")  # the resumed run names its folder
         ckpt["config"].pop("run_dir")
+        files = ckpt["log"]["files"]  # its copies of model.pt, best.pt (and pictures, GIFs)
+        for name in [name for name in files if name.endswith(".pt")]:
+            files[name] = torch.load(io.BytesIO(files[name].numpy().tobytes()),
+                                     weights_only=True)
+            files[name]["config"].pop("resume")  # these too, as their run named them
+            files[name]["config"].pop("run_dir")
     assert_same_state(ca, cb)
 
 
@@ -436,6 +443,63 @@ def test_resume_extends_a_finished_run_and_refuses_other_learning_settings(unbro
     assert [e["global_step"] for e in result["evaluations"]][-2:] == [2400, 2700]
     ckpt = torch.load(run / "checkpoint.pt", weights_only=True)
     assert ckpt["global_step"] == 2700 and ckpt["config"]["hidden"] == 64  # the saved settings
+
+
+def assert_files_agree_with_the_logs(run, scratch):
+    """curve.png and inside.png are what the run's logs draw; best.pt is the actor of the
+    best evaluation in evaluations.csv (the first of equals), and best.gif that actor's
+    episode, as the run records it."""
+    import shutil
+    import types
+
+    rows = list(csv.DictReader(open(run / "evaluations.csv")))
+    means = [float(r["eval_mean"]) for r in rows]
+    best = torch.load(run / "best.pt", weights_only=True)
+    assert best["global_step"] == int(rows[int(np.argmax(means))]["global_step"]), (
+        best["global_step"], rows)
+    copy = scratch / run.name  # the pictures' title is the folder's name
+    copy.mkdir(parents=True)
+    for name in ("evaluations.csv", "episodes.csv"):
+        shutil.copy(run / name, copy)
+    log = types.SimpleNamespace(dir=copy, labels=runlog.EvaluationLog(
+        ddpg.SCRIPT, ddpg.Config(resume=str(copy)), "cpu", ddpg.LOGGED, 0, 1).labels)
+    report.draw_pictures(log, ddpg.PICTURES, report.plots.evaluation_returns())
+    for name in ("curve.png", "inside.png"):
+        assert (run / name).read_bytes() == (copy / name).read_bytes(), name
+    actor = ddpg.Actor(best["obs_dim"], best["act_dim"], best["config"]["hidden"],
+                       np.array(best["low"]), np.array(best["high"]))
+    actor.load_state_dict(best["actor"])
+    common.record_gif(best["config"]["env_id"], common.deterministic(actor, "cpu"),
+                      copy / "best.gif", best["config"]["eval_seed"], **mujoco_env.GIF)
+    assert (run / "best.gif").read_bytes() == (copy / "best.gif").read_bytes()
+
+
+def test_resume_after_a_kill_puts_back_the_pictures_and_best_files_of_its_checkpoint(tmp_path):
+    """kill -9 after evaluations past the step-1600 checkpoint drew curve.png and wrote a new
+    best: --resume puts back the pictures, best.pt and best.gif as they were at the
+    checkpoint (a Ctrl-C right after the resume leaves no future drawn), and they agree with
+    evaluations.csv again when the run ends."""
+    flags = pendulum_flags(gifs=True, curves=True)
+    proc = subprocess.Popen([sys.executable, str(ROOT / "ddpg_walker.py"), *map(str, flags),
+                             "--run-dir", str(tmp_path / "runs")], stdout=subprocess.PIPE,
+                            text=True, cwd=ROOT, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    for line in proc.stdout:  # step 2200: the evaluation at 2100 has written its files
+        if line.startswith("step     2200"):
+            break
+    proc.kill()  # SIGKILL: no handler runs, nothing is saved
+    proc.wait()
+    (run,) = (tmp_path / "runs").iterdir()
+    saved = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
+    future = torch.load(run / "best.pt", weights_only=True)["global_step"]
+    assert saved == 1600 and future > saved  # what this test is about: a best past it
+    code, out, err = interrupt("ddpg_walker.py", "--resume", run, after="resumed")
+    assert code == 130, (out, err)
+    assert torch.load(run / "best.pt", weights_only=True)["global_step"] <= saved
+    assert torch.load(run / "model.pt", weights_only=True)["global_step"] <= 1700
+    assert_files_agree_with_the_logs(run, tmp_path / "at_the_checkpoint")
+    ddpg.train(ddpg.Config(resume=str(run)))
+    assert_files_agree_with_the_logs(run, tmp_path / "at_the_end")
+    assert torch.load(run / "best.pt", weights_only=True)["global_step"] == future
 
 
 def test_same_seed_same_evaluations(tmp_path):

@@ -130,8 +130,9 @@ def test_ctrl_c_in_the_middle_of_writing_model_pt(script, tmp_path, sent):
 
 @pytest.mark.parametrize("sent", SIGNALS)
 def test_ctrl_c_while_a_gif_is_written(tmp_path, sent):
-    """The GIF being written is finished, then the Ctrl-C (or SIGTERM) ends the run."""
-    name, code, line = sent
+    """The GIF being written is finished, then the Ctrl-C (or SIGTERM) ends the run, with the
+    line that says where the run folder and its model.pt are (a late Ctrl-C, as below)."""
+    name, code, _ = sent
     env = hooked(tmp_path, f'''
         def patch(v2):
             real = v2.mimsave
@@ -144,8 +145,10 @@ def test_ctrl_c_while_a_gif_is_written(tmp_path, sent):
     ''')
     p = run_script("ppo_cartpole.py", "--run-dir", tmp_path, *QUICK, env=env, timeout=300)
     assert p.returncode == code, p.stderr
-    assert one_line(p.stderr, line), p.stderr
+    assert p.stderr.strip() == "", p.stderr
     (run,) = run_folders(tmp_path)
+    last = p.stdout.strip().splitlines()[-1]
+    assert last.startswith("interrupted") and str(run) in last and "model.pt" in last, last
     assert len(iio.imread(run / "after.gif", index=None)) > 1  # whole, every frame
     assert not list(run.glob("*.tmp*"))
 
@@ -241,3 +244,108 @@ def test_cuda_without_a_gpu_says_so_and_trains_on_the_cpu(script, tmp_path):
     (run,) = tmp_path.iterdir()
     with open(run / "progress.csv") as f:
         assert len(list(csv.DictReader(f))) >= 1  # it trained
+
+
+# --- a late Ctrl-C, after training: the line still says where the model is --------------------
+
+WALKER = ["--env-id", "InvertedPendulum-v5", "--total-timesteps", 300, "--start-steps", 200,
+          "--eval-every", 150, "--eval-episodes", 1, "--batch-size", 64, "--hidden", 64]
+# (script, its flags, the function of common.py the child stops itself in, at the first call
+# with an argument that ends so): the final evaluation of a script that updates on batches; a
+# walker's before.gif, recorded after its training and its last evaluation
+LATE = [pytest.param("ppo_cartpole", QUICK, "evaluate", "", id="ppo_cartpole"),
+        pytest.param("ddpg_walker", WALKER, "record_gif", "before.gif", id="ddpg_walker")]
+
+
+@pytest.mark.parametrize("sent", SIGNALS)
+@pytest.mark.parametrize("script,flags,function,path_ends", LATE)
+def test_a_late_ctrl_c_names_the_run_folder_and_model_pt(script, flags, function, path_ends,
+                                                          tmp_path, sent):
+    """A Ctrl-C (or SIGTERM) after training, in its final evaluation or GIFs, ends with a line
+    like that of every other stop, which names the run folder and model.pt (not with
+    cli.clear_exit's bare "interrupted (Ctrl-C)"); exit 130 (143)."""
+    name, code, _ = sent
+    env = hooked(tmp_path, f'''
+        def patch(common):
+            real = common.{function}
+            def stopped(*args, **kwargs):
+                if any(str(arg).endswith("{path_ends}") for arg in args):
+                    signal.raise_signal(signal.{name})
+                return real(*args, **kwargs)
+            common.{function} = stopped
+        after_import("common", patch)
+    ''')
+    p = run_script(f"{script}.py", "--run-dir", tmp_path, *flags, env=env, timeout=300)
+    assert p.returncode == code, (p.stdout, p.stderr)
+    assert p.stderr.strip() == "", p.stderr  # the one line goes to stdout, as at other stops
+    (run,) = run_folders(tmp_path)
+    last = p.stdout.strip().splitlines()[-1]
+    assert last.startswith("interrupted") and "after training" in last, p.stdout
+    assert str(run) in last and "model.pt" in last and (run / "model.pt").exists(), last
+
+
+# --- read-only and missing places: one line, exit 2, before any long work ------------------
+
+from test_tools import read_only  # noqa: E402,F401  (the fixture)
+
+
+@pytest.mark.parametrize("where", ["missing", "read-only"])
+def test_a_gif_into_a_missing_or_read_only_folder_is_refused_before_playing(where, models,
+                                                                          tmp_path, read_only,
+                                                                          monkeypatch, capsys):
+    """--gif's folder is checked with the flags, before the model is loaded or an episode
+    played: one line, exit 2."""
+    import common
+
+    folder = tmp_path / "out"
+    if where == "read-only":
+        folder.mkdir()
+        read_only(folder)
+    monkeypatch.setattr(common, "record_gif", lambda *args, **kw: pytest.fail("it played"))
+    p = run_main("ppo_cartpole.py", "--eval", models["ppo_cartpole"], "--gif",
+                 folder / "x.gif", capsys=capsys)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert one_line(p.stderr, f"error: --gif {folder / 'x.gif'}: "
+                    + ("no folder" if where == "missing" else "cannot write into")), p.stderr
+
+
+@pytest.mark.parametrize("script", ["ppo_cartpole", "ddpg_walker"])  # UpdateLog, EvaluationLog
+def test_a_read_only_run_dir_is_one_line_and_a_missing_one_is_made(script, tmp_path, read_only,
+                                                                  capsys):
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    read_only(folder)
+    small = {"ppo_cartpole": QUICK, "ddpg_walker": WALKER}[script]
+    for run_dir in (folder, folder / "inside"):
+        p = run_main(f"{script}.py", "--run-dir", run_dir, "--no-gifs", *small, capsys=capsys)
+        assert p.returncode == 2, (p.stdout, p.stderr)
+        assert one_line(p.stderr, f"error: cannot create run folder {run_dir}"), p.stderr
+    p = run_main(f"{script}.py", "--run-dir", tmp_path / "new" / "runs", "--no-gifs",
+                 "--no-curves", *small, capsys=capsys)
+    assert p.returncode == 0, p.stderr
+    assert len(list((tmp_path / "new" / "runs").iterdir())) == 1
+
+
+def test_resume_of_a_read_only_run_is_one_line_and_eval_of_it_writes_nothing(tmp_path,
+                                                                            read_only, capsys):
+    """--resume writes into the run's folder: refused at once, in one line, before the
+    checkpoint is loaded. --eval only reads: it plays the run (runs/latest too), and writes
+    its --gif elsewhere."""
+    assert run_main("ddpg_walker.py", "--run-dir", tmp_path / "runs", *WALKER,
+                    capsys=capsys).returncode == 0
+    (run,) = (tmp_path / "runs").iterdir()
+    read_only(tmp_path / "runs")
+    before = {p.name: p.read_bytes() for p in run.iterdir()}
+    p = run_main("ddpg_walker.py", "--resume", run, "--total-timesteps", 600, capsys=capsys)
+    assert p.returncode == 2, (p.stdout, p.stderr)
+    assert one_line(p.stderr, "--resume goes on in the run's folder: cannot write into "
+                    f"{run}: "), p.stderr
+    assert "resume a writable copy of it (--eval only reads it)" in p.stderr
+    for played in (run, tmp_path / "runs" / "latest", tmp_path / "runs" / "latest" / "best.pt"):
+        p = run_main("ddpg_walker.py", "--eval", played, "--eval-episodes", 1, capsys=capsys)
+        assert p.returncode == 0 and p.stderr == "", p.stderr
+    (tmp_path / "out").mkdir()
+    p = run_main("ddpg_walker.py", "--eval", tmp_path / "runs" / "latest", "--gif",
+                 tmp_path / "out" / "x.gif", capsys=capsys)
+    assert p.returncode == 0 and (tmp_path / "out" / "x.gif").stat().st_size > 0, p.stderr
+    assert {p.name: p.read_bytes() for p in run.iterdir()} == before

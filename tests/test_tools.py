@@ -2,6 +2,7 @@
 the last part of common.py): flags, run folders, CSV rows, checkpoints, one-line errors,
 Ctrl-C and SIGTERM, the divergence check and the run's episode bookkeeping."""
 
+import copy
 import csv
 import dataclasses
 import os
@@ -603,3 +604,126 @@ def test_a_flag_this_script_lacks_gets_no_far_fetched_suggestion(capsys):
     assert "did you mean" not in p.stderr, p.stderr
     p = run_main("ppo_cartpole.py", "--lerning-rate", "1e-3", capsys=capsys)
     assert p.returncode == 2 and "(did you mean --learning-rate?)" in p.stderr, p.stderr
+
+
+# --- read-only and missing places; what --resume does with the files of later evaluations ---
+
+@pytest.fixture
+def read_only():
+    """make(folder): `folder` and what it holds read-only until the test ends. As root, whom
+    chmod does not stop, a read-only bind mount of the folder onto itself; otherwise chmod a-w
+    of each path in it. Skipped where root may not mount."""
+    from pathlib import Path
+
+    undo = []
+
+    def make(folder):
+        folder = Path(folder)
+        if os.geteuid() != 0:
+            for path in [folder, *folder.rglob("*")]:
+                mode = path.stat().st_mode
+                path.chmod(mode & ~0o222)
+                undo.append(lambda path=path, mode=mode: path.chmod(mode))
+            return folder
+        if subprocess.run(["mount", "--bind", folder, folder], capture_output=True).returncode:
+            pytest.skip("a read-only folder for root needs a bind mount, not allowed here")
+        undo.append(lambda: subprocess.run(["umount", "-l", folder], check=True))
+        subprocess.run(["mount", "-o", "remount,ro,bind", folder], check=True)
+        return folder
+
+    yield make
+    for step in reversed(undo):
+        step()
+
+
+@pytest.mark.quick
+def test_a_write_into_a_read_only_or_missing_folder_is_one_clear_error(tmp_path, read_only):
+    """written_whole: the clear error, not the traceback of its .tmp's cleanup (which cannot
+    remove a file from a read-only folder either); check_writable: the same, before any work,
+    and nothing left behind where the folder takes files."""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    read_only(folder)
+    with pytest.raises(UserError, match=r"cannot write .*x\.gif: (Read-only|Permission)"):
+        with common.written_whole(folder / "x.gif") as tmp:
+            tmp.write_bytes(b"GIF89a")
+    with pytest.raises(UserError, match=r"^--gif x\.gif: cannot write into .*out: "
+                                        r"(Read-only|Permission).*; copy it$"):
+        common.check_writable(folder, "--gif x.gif", "copy it")
+    with pytest.raises(UserError, match="--gif: no folder .*missing"):
+        common.check_writable(tmp_path / "missing", "--gif")
+    common.check_writable(tmp_path, "--gif")
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # the tried write left nothing
+
+
+def evaluation_log(tmp_path, **flags):
+    cfg = dataclasses.make_dataclass("Cfg", [("env_id", str, "Env-v0"), ("seed", int, 0),
+                                             ("total_timesteps", int, 100)],
+                                     bases=(cli.CheckpointFlags,))(
+        **{"run_dir": str(tmp_path), "print_every": 1000, **flags})
+    return runlog.EvaluationLog("some_script", cfg, "cpu", {}, 0, 10)
+
+
+# what report.after_evaluation writes besides the row (a planted bug may leave one out of
+# runlog.EVALUATION_FILES: the tests name them themselves)
+WRITTEN_AT_AN_EVALUATION = ("model.pt", "best.pt", "best.gif", "curve.png", "inside.png")
+
+
+def files_of(run):
+    return {p.name: p.read_bytes() for p in run.dir.iterdir() if p.suffix != ".csv"}
+
+
+@pytest.mark.quick
+def test_resume_puts_back_the_files_of_the_evaluations_up_to_its_checkpoint(tmp_path):
+    """What the evaluations wrote besides their rows (model.pt, best.pt, best.gif, curve.png,
+    inside.png) is in checkpoint.pt, loaded with weights_only: a resume puts it back, and a
+    file first written past the checkpoint goes."""
+    run = evaluation_log(tmp_path)
+    run.evaluation(10, [1.0])
+    for name in ("model.pt", "best.pt", "curve.png"):
+        (run.dir / name).write_bytes(f"{name} at step 10".encode())
+    checkpoints.save_checkpoint(dict(log=run.state_dict()), tmp_path / "c.pt")
+    state = checkpoints.load_checkpoint(tmp_path / "c.pt")["log"]
+    run.evaluation(20, [5.0])  # past the checkpoint: a new best, drawn, recorded
+    for name in WRITTEN_AT_AN_EVALUATION:
+        (run.dir / name).write_bytes(f"{name} at step 20".encode())
+    evaluation_log(tmp_path, resume=str(run.dir)).load_state_dict(state)
+    assert files_of(run) == {name: f"{name} at step 10".encode()
+                             for name in ("model.pt", "best.pt", "curve.png")}
+    assert (run.dir / "evaluations.csv").read_text().splitlines()[1:] == ["10,1,0,0,nan"]
+
+
+@pytest.mark.quick
+def test_resume_from_an_older_checkpoint_removes_what_is_past_it(tmp_path, capsys):
+    """A checkpoint of an older version keeps no copies: the pictures of the rows it cuts go,
+    and best.pt with its best.gif if best.pt is of an evaluation past it; model.pt stays,
+    and so does a best.pt of an evaluation it keeps."""
+    run = evaluation_log(tmp_path)
+    run.evaluation(10, [1.0])
+    older = {key: copy.deepcopy(value) for key, value in run.state_dict().items()
+             if key != "files"}
+    run.evaluation(20, [5.0])
+    for name in WRITTEN_AT_AN_EVALUATION:
+        (run.dir / name).write_bytes(b"step 20")
+    torch.save(dict(global_step=20), run.dir / "best.pt")
+    evaluation_log(tmp_path, resume=str(run.dir)).load_state_dict(older)
+    assert files_of(run) == {"model.pt": b"step 20"}
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1].startswith("curve.png, inside.png, best.pt, best.gif: of evaluations past "
+                              "the checkpoint, removed"), out
+    torch.save(dict(global_step=10), run.dir / "best.pt")  # the best of the kept rows
+    (run.dir / "curve.png").write_bytes(b"step 10")  # drawn from them
+    evaluation_log(tmp_path, resume=str(run.dir)).load_state_dict(older)
+    assert set(files_of(run)) == {"model.pt", "best.pt", "curve.png"}
+
+
+@pytest.mark.quick
+def test_a_new_best_without_gifs_removes_the_best_gif_of_an_earlier_one(tmp_path):
+    """A run resumed with --no-gifs: best.gif would show an earlier best than best.pt."""
+    import report
+
+    run = evaluation_log(tmp_path, gifs=False, curves=False)
+    (run.dir / "best.gif").write_bytes(b"an earlier best")
+    best = run.evaluation(10, [1.0])
+    report.after_evaluation(run, torch.nn.Linear(2, 1), best, "cpu", {}, {})
+    assert set(files_of(run)) == {"model.pt", "best.pt"}
