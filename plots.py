@@ -407,8 +407,10 @@ def compare_figure(run_dirs):
             continue
         parts = run_dir.name.split("__")  # <script>__<env>__seed<k>__<time>
         steps, values, what = curve_of(run_dir)
-        if not len(steps):
-            print(f"note: {run_dir} has nothing to draw yet; left out", file=sys.stderr)
+        if not len(steps):  # no episode ended yet, or a script that logs no return at all
+            print(f"note: {run_dir} holds no return to compare yet (recent_return or eval_mean;"
+                  " a run that logs other measures draws them in its own curve.png); left out",
+                  file=sys.stderr)
             continue
         env = parts[1] if len(parts) > 1 else "env unknown"
         panels.setdefault((env, what), {}).setdefault(parts[0], []).append((steps, values))

@@ -399,3 +399,17 @@ def test_the_maps_are_titled_with_what_the_script_says_they_show():
         assert [ax.get_title() for ax in axes] == [
             f"{value}, untrained", f"{value}, trained", "true V^pi(s), Monte-Carlo",
             f"{policy}, untrained", f"{policy}, trained"]
+
+
+def test_a_run_that_logs_no_return_is_left_out_with_a_line_that_says_why(tmp_path, capsys):
+    """A finished run whose log holds other measures (a language model's accuracy, two tabular
+    agents' returns under their own names) is no 'nothing to draw yet': it says what it lacks."""
+    import plots
+
+    run = tmp_path / "some_script__task__seed0__20260101-000000"
+    run.mkdir()
+    (run / "progress.csv").write_text("global_step,loss,pass1\n10,2.4,0.1\n20,2.1,0.3\n")
+    with pytest.raises(SystemExit):
+        plots.compare_figure([run])
+    err = capsys.readouterr().err
+    assert "holds no return to compare" in err and "its own curve.png" in err, err
