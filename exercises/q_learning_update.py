@@ -11,7 +11,7 @@ this target, a network in place of the table.
     python exercises/check.py q_learning_update
 The reference answer: q_learning_cliffwalking.q_learning_update (q_learning_cliffwalking.py).
 
-练习：Q 学习（Q-learning）的更新，异策略的 TD 控制（Watkins 1989；Sutton & Barto 2018 的式 6.8）。每走一步
+练习：Q 学习（Q-learning）的更新，异策略的 TD 控制（Watkins 1989；Sutton 和 Barto 2018 的式 6.8）。每走一步
 (S, A, R, S')，Q(S, A) 朝目标 R + gamma * max_a' Q(S', a') 走 alpha 那么大的一步：用的是 S' 里最好的动作，
 不管智能体接下来真的做什么。所以智能体一边探索，Q 一边学到 Q*，贪心路径就是贴着悬崖的最优路径。终止（到达
 终点）之后没有 S' 可估值：目标只有 R。dqn_cartpole.py 用的是同一个目标，只是把表换成了网络。

@@ -9,7 +9,7 @@ variance. V is a constant in pi's weight (detached); its own loss fits it to G_t
     python exercises/check.py reinforce_loss
 The reference answer: reinforce_cartpole.reinforce_loss (reinforce_cartpole.py).
 
-练习：带学到的基线的 REINFORCE 损失（Williams 1992；Sutton & Barto 2018 第 13.3-13.4 节）。策略梯度
+练习：带学到的基线的 REINFORCE 损失（Williams 1992；Sutton 和 Barto 2018 第 13.3-13.4 节）。策略梯度
 grad J = E[grad log pi(a_t|s_t) * (G_t - b(s_t))]，在一批完整的回合上估计，取负号后做梯度下降。
 基线 b(s_t) 就是学到的 V(s_t)：减去它，梯度的期望不变、方差变小。在 π 的权重里 V 是常数（detach），
 V 自己的损失让它拟合 G_t。参考答案：reinforce_cartpole.reinforce_loss。

@@ -10,7 +10,7 @@ train() decides which and passes it in.
     python exercises/check.py reward_to_go
 The reference answer: reinforce_cartpole.reward_to_go (reinforce_cartpole.py).
 
-练习：REINFORCE 的回报（reward-to-go，Williams 1992；Sutton & Barto 2018 第 13.3 节）。每个动作的
+练习：REINFORCE 的回报（reward-to-go，Williams 1992；Sutton 和 Barto 2018 第 13.3 节）。每个动作的
 对数概率按它之后拿到的回报 G_t = r_t + gamma * r_{t+1} + gamma^2 * r_{t+2} + ... 提高，一直算到回合结束。
 t 之前的奖励不算（动作改变不了它们），之后的每个奖励按离 t 多远打折。从后往前算
 G_t = r_t + gamma * G_{t+1}，G_T = last_value：杆倒了（终止）时是 0，时间截断时是 V(s_T)，由 train()

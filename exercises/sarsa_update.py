@@ -9,7 +9,7 @@ After a termination (the goal) there is no S' to value: the target is R alone.
     python exercises/check.py sarsa_update
 The reference answer: q_learning_cliffwalking.sarsa_update (q_learning_cliffwalking.py).
 
-练习：Sarsa 的更新，同策略的 TD 控制（Sutton & Barto 2018 的式 6.7）。每走一步 (S, A, R, S', A')，
+练习：Sarsa 的更新，同策略的 TD 控制（Sutton 和 Barto 2018 的式 6.7）。每走一步 (S, A, R, S', A')，
 Q(S, A) 朝目标 R + gamma * Q(S', A') 走 alpha 那么大的一步；A' 是智能体在 S' 真的要做的动作，
 探索的动作也算。所以 Q 学到的是它自己这个 ε-贪心策略的价值（掉下悬崖也算在内），贪心路径离悬崖远一些。
 终止（到达终点）之后没有 S' 可估值：目标只有 R。参考答案：q_learning_cliffwalking.sarsa_update。
