@@ -151,8 +151,8 @@ def parse_config(cls, argv=None, description=None):
         flag = "--" + f.name.replace("_", "-")
         text = docs.get(f.name, "") + (f"; none on the command line: {flag} none"
                                        if "None" in name else "")
-        chinese = zh_docs.get(f.name, "（还没有中文说明）") + (f"；默认不设；要在命令行上明确写出“不设”，用 {flag} none"
-                                                            if "None" in name else "")
+        chinese = zh_docs.get(f.name, "（还没有中文说明）") + (
+            f"；默认不设（命令行上写 {flag} none 也表示不设）" if "None" in name else "")
         text = (text + (f"\n{chinese}" if zh else "")).replace("%", "%%")
         hidden = f.name in unused  # out of --help, and absent unless given (then refused)
         parser.add_argument(flag, default=argparse.SUPPRESS if hidden else f.default, **how,
