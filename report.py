@@ -203,9 +203,8 @@ def finish_evaluations(run, global_step, interrupted, untrained, actor, device, 
                 print(f"{name}: return {ret:.0f} -> {run.dir / name}", flush=True)
     except KeyboardInterrupt:  # main() then exits with 130 (143 after a SIGTERM)
         result["interrupted"] = True
-        print(f"interrupted at step {global_step}, after training, while its before and after "
-              f"GIFs were recorded: {run.dir / 'model.pt'} holds the trained actor (replay: "
-              f"python {run.script}.py --eval {run.dir})", flush=True)
+        interrupted_at(run, global_step, "replay", ", after training, while its before and "
+                       "after GIFs were recorded")
     return result
 
 
