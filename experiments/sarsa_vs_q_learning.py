@@ -113,13 +113,14 @@ def main():
         lab.wrong("--cluster: these runs take seconds, one after another in this process")
     seeds, episodes = ((0,), 50) if given["quick"] else (SEEDS, SETTINGS["total_episodes"])
     started, runs = time.time(), {}
-    try:
-        with tempfile.TemporaryDirectory(prefix="experiment_") as folder:
+    try:  # SIGTERM (kill PID) as Ctrl-C, as lab.main has it
+        with common.sigterm_as_ctrl_c(), tempfile.TemporaryDirectory(prefix="experiment_") as tmp:
             for variant, epsilon in VARIANTS.items():
-                runs[variant] = [one_run(epsilon, seed, episodes, folder) for seed in seeds]
+                runs[variant] = [one_run(epsilon, seed, episodes, tmp) for seed in seeds]
     except KeyboardInterrupt:
-        print("\ninterrupted (Ctrl-C): nothing kept; run it again (seconds)", file=sys.stderr)
-        raise SystemExit(130) from None
+        how, code = common.stopped_by()
+        print(f"\ninterrupted ({how}): nothing kept; run it again (seconds)", file=sys.stderr)
+        raise SystemExit(code) from None
     report(runs, lab.DOCS if given["docs"] else lab.OUT, keep=not given["quick"])
     print(f"\n{len(VARIANTS)} variants x {len(seeds)} seeds x {episodes} episodes in "
           f"{time.time() - started:.0f} s")

@@ -618,3 +618,30 @@ def test_double_dqn_writes_each_check_of_q_against_the_return_and_its_gap(tmp_pa
     assert rows[1:3] == [[default, "0", "512", "50", "40", "10"],
                          [default, "0", "768", "90", "95", "-5"]]
     assert len(rows) == 5 and "+2.50 [+2.50, +2.50]" in capsys.readouterr().out  # median(10, -5)
+
+
+@pytest.mark.parametrize("signum, code, name", [(signal.SIGINT, 130, "Ctrl-C"),
+                                                (signal.SIGTERM, 143, "SIGTERM")])
+def test_the_tabular_experiment_stops_on_sigterm_as_on_ctrl_c(signum, code, name, monkeypatch,
+                                                              capsys, tmp_path):
+    """sarsa_vs_q_learning.py runs its own loop (not lab.main's): a SIGTERM in its first run
+    ends it as a Ctrl-C does, in one line, with its own exit code."""
+    real = sarsa_vs_q_learning.tabular.train
+
+    def stopped(cfg):
+        signal.raise_signal(signum)  # as `kill PID` (or Ctrl-C) would, inside the run
+        return real(cfg)
+    def unhandled(signum, frame):  # where the experiment leaves SIGTERM as it was
+        raise AssertionError("SIGTERM reached the handler the experiment started with")
+    monkeypatch.setattr(sarsa_vs_q_learning.tabular, "train", stopped)
+    monkeypatch.setattr(sys, "argv", ["sarsa_vs_q_learning.py", "--quick"])
+    before = signal.signal(signal.SIGTERM, unhandled)  # not this test process's death
+    restore = lambda: signal.signal(signal.SIGTERM, before)  # noqa: E731
+    monkeypatch.chdir(tmp_path)
+    try:
+        with pytest.raises(SystemExit) as exit_:
+            sarsa_vs_q_learning.main()
+    finally:
+        restore()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == code and len(err) == 1 and f"interrupted ({name})" in err[0], err
