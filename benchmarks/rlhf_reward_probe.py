@@ -2,7 +2,8 @@
 (docs/ppo_to_rlhf.md, "Reward hacking"): the right sum, the sum with its carry wrong (what
 the supervised model gets wrong, so what the preference pairs show), and the sum with its
 ones digit one off (an error the supervised model hardly makes, so the pairs hardly show).
-Both errors have the same true score, 0.75.
+The judge scores the ones digit off 0.75 on every sum, the carry wrong 0.75 on most and 0.5
+where the carry also reaches the hundreds digit (55+48=093.; 53 of the 500 held-out sums).
 
     python benchmarks/rlhf_reward_probe.py RUN_DIR     # a finished rlhf_addition.py run
 """
