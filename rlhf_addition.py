@@ -37,11 +37,14 @@ from grpo_addition import (TinyGPT, completion_mask, decode, encode, lengths, pr
                            sample, split_pairs, supervised_step, token_logp)
 
 SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it loads no other's)
+CHECK_PROMPTS = 100  # held-out prompts of the checks during training (a stage's line: all of them)
+# progress.csv's columns: (progress-line format, the pictures' label)
 LOGGED = dict(phase=("s", "stage"), loss=(".4f", "loss"), rm_accuracy=(".3f", "pair accuracy"),
               rm_score=("+.3f", "learned reward"), true_score=(".3f", "true (hidden) score"),
               kl=(".3f", "KL to the supervised model"), loss_v=(None, "value loss"),
-              clipfrac=(None, "clipfrac"), held_true=(".3f", "held-out true score"),
-              held_accuracy=(".3f", "held-out accuracy"))  # progress.csv: (line format, label)
+              clipfrac=(None, "clipfrac"),
+              held_true=(".3f", f"held-out true score ({CHECK_PROMPTS} prompts)"),
+              held_accuracy=(".3f", f"held-out accuracy ({CHECK_PROMPTS} prompts)"))
 SMOKE = dict(digits=1, sft_steps=30, pair_prompts=10, ppo_steps=3, ppo_prompts=8,  # the tests':
              eval_every=2, eval_prompts=10, n_layer=1, d_model=16)  # seconds, every file
 
@@ -305,7 +308,7 @@ def ppo_update(policy, value_net, opt, data, cfg, gen):
 def log_row(run, held_out, cfg, phase, check=None, show=False, **numbers):
     """A progress.csv row (None: not measured), with held-out figures of a model to `check`."""
     run.global_step += 1
-    held = evaluate(check, held_out, cfg, 100) if check is not None else (None, None)
+    held = evaluate(check, held_out, cfg, CHECK_PROMPTS) if check is not None else (None, None)
     run.update(dict(dict.fromkeys(LOGGED), phase=phase, **numbers, held_true=held[0],
                     held_accuracy=held[1]), show=show or check is not None)
 
@@ -415,8 +418,9 @@ def pictures(margins):
     """curve.png: each stage over its steps; inside.png: r's margins on held-out pairs (r is
     known up to a shift per prompt: only r(x, y_w) - r(x, y_l) means something), PPO's over KL."""
     numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
-    stages = [plots.lines(*numbers, title=name, where=("phase", name), xlabel="step")
-              for name in ("sft", "rm", "ppo", "dpo")]
+    checked = f" (held-out: {CHECK_PROMPTS} prompts; the line after the stage: all)"
+    stages = [plots.lines(*numbers, title=name + checked * (name != "rm"), where=("phase", name),
+                          xlabel="step") for name in ("sft", "rm", "ppo", "dpo")]
     return dict(curve=[stages[:2], stages[2:]], inside=[[
         plots.distributions({"r(x, y_w) - r(x, y_l)": margins.numpy()}, "reward model on "
                             "held-out pairs: right of 0, ranked right", "margin"),
