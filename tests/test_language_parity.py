@@ -38,6 +38,9 @@ GLOSSARY = {
     "检查程序": (),
     "题目": ("提示词",),
     "统计口径": ("量法",),
+    "隐式奖励": ("隐含奖励",),
+    "标准误差": (),  # not 标准误 alone: checked below, as it is a part of 标准误差
+    "监督学习": ("监督训练", "有监督训练"),
 }
 GRPO_TEXTS = ("docs/ppo_to_grpo.zh-CN.md", "grpo_addition.py")  # verifier and prompt live here
 
@@ -261,6 +264,10 @@ def test_one_glossary_for_every_chinese_text():
                     if other in line:
                         pytest.fail(f"{name} says {other} where the glossary's word is {word}: "
                                     f"«{line.strip()[:120]}»")
+        for line in text.splitlines():
+            if re.search(r"标准误(?!差)", line):
+                pytest.fail(f"{name} says 标准误 where the glossary's word is 标准误差: "
+                            f"«{line.strip()[:120]}»")
         for line in prose(text).splitlines():  # 截断 is the time limit's, and nothing else's
             if "截断" in line:
                 assert "时间截断" in line or "truncated" in line, \
