@@ -156,6 +156,21 @@ class RandomState:
         return self.env.action_space.np_random.bit_generator
 
 
+class Arrays:
+    """A training loop's own numpy arrays (e.g. which envs reset at their next step), by name,
+    as a state_dict() for checkpoint.pt; load_state_dict() writes them back in place."""
+
+    def __init__(self, **arrays):
+        self.arrays = arrays
+
+    def state_dict(self):
+        return {name: torch.from_numpy(array.copy()) for name, array in self.arrays.items()}
+
+    def load_state_dict(self, state):
+        for name, array in self.arrays.items():
+            array[...] = state[name].numpy()
+
+
 class CtrlC:
     """Around a training loop: a first Ctrl-C (or SIGTERM: common.sigterm_as_ctrl_c) only sets
     `pressed`, so the loop can finish its step and stop where nothing is half done; a second

@@ -1,6 +1,6 @@
 """What the scripts share and a reader reads beside them: discounted returns and GAE (with
-worked examples), running a policy (evaluation), what the pictures of inside.png measure,
-making the envs, and at the end the small tools everything else builds on (one-line errors,
+worked examples), running statistics to normalise with, running a policy (evaluation), what
+the pictures of inside.png measure, making the envs, and at the end the small tools everything else builds on (one-line errors,
 SIGTERM as Ctrl-C, whole-file writes). It imports no other module of this project.
 
 The training loops live in the scripts, each read top to bottom on its own. What a reader
@@ -87,6 +87,49 @@ def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
         delta = rewards[t] + gamma * next_values[t] * not_terminated[t] - values[t]
         last = advantages[t] = delta + gamma * lam * not_done[t] * last
     return advantages
+
+
+# =============================================================================
+# Normalisation: running statistics
+# =============================================================================
+
+
+class RunningNorm(torch.nn.Module):
+    """Observation (or return) normalisation, as a PPO for MuJoCo usually has it: the running
+    mean and variance of everything update() has seen (Chan et al.'s formula for merging two
+    batches' moments, as gymnasium's RunningMeanStd), and forward: (x - mean) / sqrt(var +
+    1e-8), clipped to +-10. Its numbers are buffers: saved with the networks' weights in
+    state_dict(). Off (active False): forward returns x as it is.
+
+    A worked example: after [0, 2] and then [4], the mean is 2 and the variance 8/3, as of
+    [0, 2, 4] at once (the count starts at 1e-4, as gymnasium's, so they differ by ~1e-4).
+
+    >>> norm = RunningNorm(())
+    >>> norm.update(torch.tensor([0., 2.])); norm.update(torch.tensor([4.]))
+    >>> round(norm.mean.item(), 3), round(norm.var.item(), 3)
+    (2.0, 2.667)
+    """
+
+    def __init__(self, shape, active=True):
+        super().__init__()
+        self.register_buffer("mean", torch.zeros(shape, dtype=torch.float64))
+        self.register_buffer("var", torch.ones(shape, dtype=torch.float64))
+        self.register_buffer("count", torch.tensor(1e-4, dtype=torch.float64))
+        self.register_buffer("active", torch.tensor(active))
+
+    def update(self, x):
+        x = torch.as_tensor(x, dtype=torch.float64)  # (B, *shape)
+        delta, n = x.mean(0) - self.mean, x.shape[0]
+        total = self.count + n
+        self.mean += delta * n / total
+        self.var = (self.var * self.count + x.var(0, unbiased=False) * n
+                    + delta ** 2 * self.count * n / total) / total
+        self.count = total
+
+    def forward(self, x):
+        if not self.active:
+            return x
+        return ((x - self.mean) / torch.sqrt(self.var + 1e-8)).clamp(-10, 10).to(x.dtype)
 
 
 # =============================================================================
@@ -281,21 +324,24 @@ def q_against_return(trajectories, actor, critic, gamma, device, horizon=None):
 # =============================================================================
 
 
-def make_vec_env(env_id, num_envs, seed, solved_return=None):
-    """gym.make_vec of a Discrete-action env, reset with `seed`. Returns the envs, the first
-    obs and the return that counts as solved (solved_return, or the env's reward_threshold).
+def make_vec_env(env_id, num_envs, seed, solved_return=None, continuous=False):
+    """gym.make_vec of a Discrete-action env (continuous=True: a Box-action one), reset with
+    `seed`. Returns the envs, the first obs and the return that counts as solved (solved_return,
+    or the env's reward_threshold; a Discrete-action env must have one, for the solved rule).
 
     Autoreset is NEXT_STEP (gymnasium 1.x's default): the step after an episode ends is a reset
     step. RecordEpisodeStatistics puts each ended episode's return in info["episode"]."""
+    kind = gym.spaces.Box if continuous else gym.spaces.Discrete
     with env_errors(env_id):
         envs = gym.make_vec(env_id, num_envs)
         envs = gym.wrappers.vector.RecordEpisodeStatistics(envs)
         assert envs.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
-        if not isinstance(envs.single_action_space, gym.spaces.Discrete):
+        if not isinstance(envs.single_action_space, kind):
+            envs.close()
             raise UserError(f"{env_id} has {type(envs.single_action_space).__name__} "
-                                     "actions; this script needs Discrete actions")
+                            f"actions; this script needs {kind.__name__} actions")
         solved = envs.spec.reward_threshold if solved_return is None else solved_return
-        if solved is None:
+        if solved is None and not continuous:
             raise UserError(f"{env_id} has no reward_threshold; pass --solved-return")
         envs.action_space.seed(seed)
         obs, _ = envs.reset(seed=seed)

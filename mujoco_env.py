@@ -17,6 +17,13 @@ import common
 GIF = dict(max_frames=250, every=4, scale=2, camera_name="track")
 
 
+def gif_for(env_id):
+    """GIF's settings for `env_id`: every 4th frame of a 1000-step episode, every frame of a
+    short one (Reacher's 50 steps), at most 250 frames."""
+    steps = gym.spec(env_id).max_episode_steps or 1000
+    return dict(GIF, every=max(1, min(4, steps // GIF["max_frames"])))
+
+
 class MujocoEnvState:
     """A MuJoCo env mid-episode as a state_dict(): the simulator's whole state (positions,
     velocities, the solver's warm start), the generator used at reset, and the wrappers'
@@ -24,8 +31,8 @@ class MujocoEnvState:
 
     COUNTERS = ("_elapsed_steps", "episode_returns", "episode_lengths")
 
-    def __init__(self, env):
-        self.env = env
+    def __init__(self, env, counters=COUNTERS):
+        self.env, self.counters = env, counters
 
     def state_dict(self):
         import mujoco
@@ -35,7 +42,7 @@ class MujocoEnvState:
         mujoco.mj_getState(sim.model, sim.data, state, what)
         return dict(mujoco=torch.from_numpy(state), rng=sim.np_random.bit_generator.state,
                     **{name: float(self.env.get_wrapper_attr(name)) if name == "episode_returns"
-                       else int(self.env.get_wrapper_attr(name)) for name in self.COUNTERS})
+                       else int(self.env.get_wrapper_attr(name)) for name in self.counters})
 
     def load_state_dict(self, saved):
         import mujoco
@@ -44,8 +51,37 @@ class MujocoEnvState:
         mujoco.mj_setState(sim.model, sim.data, saved["mujoco"].numpy(),
                            mujoco.mjtState.mjSTATE_INTEGRATION)
         sim.np_random.bit_generator.state = saved["rng"]
-        for name in self.COUNTERS:
+        for name in self.counters:
             self.env.set_wrapper_attr(name, saved[name])
+
+
+class MujocoVecEnvState:
+    """gym.make_vec's MuJoCo envs (under RecordEpisodeStatistics, common.make_vec_env) mid-
+    episode as a state_dict(): each env's MujocoEnvState (its time limit's counter), which envs
+    reset at their next step (NEXT_STEP autoreset), and the episodes' returns and lengths so far."""
+
+    STATS = ("episode_returns", "episode_lengths", "prev_dones")
+
+    def __init__(self, envs):
+        self.envs = envs
+
+    def state_dict(self):
+        vec = self.envs.unwrapped
+        return dict(envs=[MujocoEnvState(env, ("_elapsed_steps",)).state_dict()
+                          for env in vec.envs],
+                    autoreset=torch.from_numpy(vec._autoreset_envs.copy()),
+                    **{name: torch.from_numpy(np.array(getattr(self.envs, name)))
+                       for name in self.STATS})
+
+    def load_state_dict(self, saved):
+        vec = self.envs.unwrapped
+        if len(saved["envs"]) != len(vec.envs):
+            raise ValueError(f"{len(saved['envs'])} envs saved, {len(vec.envs)} made")
+        for env, state in zip(vec.envs, saved["envs"]):
+            MujocoEnvState(env, ("_elapsed_steps",)).load_state_dict(state)
+        vec._autoreset_envs = saved["autoreset"].numpy().copy()
+        for name in self.STATS:
+            setattr(self.envs, name, saved[name].numpy().copy())
 
 
 def watch_camera(env_id):
