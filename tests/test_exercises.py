@@ -12,6 +12,8 @@ from conftest import ROOT
 
 sys.path.insert(0, str(ROOT / "exercises"))
 import check  # noqa: E402
+import checking  # noqa: E402
+from cases import gae as gae_cases  # noqa: E402
 
 HEADER = """
 import numpy as np
@@ -853,9 +855,9 @@ WRONG["q_learning_update"] = td_wrong(False) + [
 @pytest.fixture(autouse=True)
 def english():
     """The messages in English whatever the locale (the checker's default follows it)."""
-    check.LANG = "en"
+    checking.LANG = "en"
     yield
-    check.LANG = "en"
+    checking.LANG = "en"
 
 
 def compile_answer(source, name):
@@ -994,7 +996,7 @@ def test_a_loop_that_no_longer_calls_the_function_fails_loudly():
 def test_messages_in_chinese(monkeypatch, capsys):
     """In Chinese every line is Chinese, punctuated as Chinese is (full-width colons), the
     table's lines included."""
-    monkeypatch.setattr(check, "LANG", "zh")
+    monkeypatch.setattr(checking, "LANG", "zh")
     passed, lines = run("td_target", compile_answer(WRONG["td_target"][0][0], "td_target"))
     assert not passed and lines[-1].startswith(
         "td_target：第 (a) 关“手算的例子”未通过：例子：r = (1, 2, 3)"), lines
@@ -1037,7 +1039,7 @@ def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monk
     out = capsys.readouterr().out
     assert "只跑第 (a)、(b) 两关" in out and "检查练习，分三关" in out, out
     assert "显示本帮助并退出" in out and "LANG 等以 zh 开头就用" in out and "跟随" not in out, out
-    monkeypatch.setattr(check, "LANG", "zh")
+    monkeypatch.setattr(checking, "LANG", "zh")
     passed, lines = run("td_target", compile_answer(WRONG["td_target"][0][0], "td_target"))
     assert "常见错误会得到的值：\n    没有乘 not_done，" in lines[-1], lines[-1]
 
@@ -1172,10 +1174,10 @@ def test_the_loop_notes_name_the_exercise_and_the_gae_message_fits_the_loops():
     to blame; gae's values[t + 1] mistake says the two coincide in this project's loops."""
     hint = check.EXERCISES["soft_update"].loop_hint()
     assert "moved by your function" in hint and "another function" not in hint
-    r, v = check.t([1.0, 1.0], [1.0, 1.0]), check.t([1.0, 1.0], [2.0, 2.0])
-    labels = [label for label, _ in check.gae_mistakes(
-        r, v, v, check.flags([False, False], [False, False]),
-        check.flags([True, True], [False, False]), 0.5, 1.0)]
+    r, v = checking.t([1.0, 1.0], [1.0, 1.0]), checking.t([1.0, 1.0], [2.0, 2.0])
+    labels = [label for label, _ in gae_cases.mistakes(
+        r, v, v, checking.flags([False, False], [False, False]),
+        checking.flags([True, True], [False, False]), 0.5, 1.0)]
     assert any("they coincide with values[t + 1] in this project's" in x for x in labels), labels
     assert not any("is the next episode's first state, not" in x for x in labels), labels
 

@@ -1,0 +1,39 @@
+"""The checks of exercises/adapt_beta.py, PPO-penalty's rule for beta: its worked cases, its named
+mistakes and its runs."""
+
+from types import SimpleNamespace
+
+from checking import tr
+import runs
+
+SCRIPT = "ppo_kl_cartpole"
+FUNCTION = "adapt_beta"
+ORDER = 5  # its row in docs/exercises.md's table
+OUTPUTS = ("beta",)
+RUN = runs.CARTPOLE
+LOOP = dict(runs.CARTPOLE_LOOP, total_timesteps=2560)
+LEARN = runs.PPO_LEARN
+
+
+def loop_hint():
+    return tr("Each update's beta comes from your rule.", "每次更新的 β 都来自你的规则。")
+
+
+def cases():
+    cfg = SimpleNamespace(d_targ=0.01, kl_tolerance=1.5, beta_factor=2.0)
+    return [(tr(f"beta = 1, d = {d:g} (d_targ = 0.01, tolerance 1.5, factor 2)",
+                f"β = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, cfg),
+             expected) for d, expected in ((0.001, 0.5), (0.02, 2.0), (0.01, 1.0),
+                                           (0.01 / 1.5, 1.0), (0.01 * 1.5, 1.0))]
+
+
+def mistakes(beta, d, cfg):
+    lo, hi = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance
+    return [(tr("the two rules swapped: beta must shrink when d is small, grow when it is large",
+                "两条规则反了：d 小时 β 应该变小，d 大时变大"),
+             beta * cfg.beta_factor if d < lo else beta / cfg.beta_factor if d > hi else beta),
+            (tr("the tolerance (1.5) used as the factor (2)", "把容差（1.5）当成了倍数（2）"),
+             beta / cfg.kl_tolerance if d < lo else beta * cfg.kl_tolerance if d > hi else beta),
+            (tr("<= or >= at the band's edges, where the paper's rules are strict (< and >)",
+                "区间边界用了 <= 或 >=，论文的规则是严格的 < 和 >"),
+             beta / cfg.beta_factor if d <= lo else beta * cfg.beta_factor if d >= hi else beta)]

@@ -1,0 +1,224 @@
+"""The checks of exercises/ddpg_update.py, DDPG's learning step (critic, actor, targets): its
+worked cases, its named mistakes and its runs."""
+
+from types import SimpleNamespace
+import copy
+import importlib
+import math
+
+import torch
+import torch.nn.functional as F
+
+from checking import tr, Failed, t, compare
+import runs
+
+SCRIPT = "ddpg_walker"
+FUNCTION = "ddpg_update"
+ORDER = 14  # its row in docs/exercises.md's table
+OUTPUTS = ("critic_loss", "actor_loss")
+RUN = runs.DDPG
+LOOP = runs.DDPG_LOOP
+LEARN = runs.DDPG_LEARN
+
+
+def loop_hint():
+    return runs.OFF_POLICY()
+
+
+def small_ddpg(seed=0):
+    """Tiny DDPG networks and a minibatch (3 states, 1 action), every one seeded."""
+    ddpg = importlib.import_module("ddpg_walker")
+    torch.manual_seed(seed)
+    low, high = torch.tensor([-2.0]).numpy(), torch.tensor([2.0]).numpy()
+    nets = ddpg.build(3, 1, low.astype("float64"), high.astype("float64"),
+                      SimpleNamespace(hidden=8, actor_lr=1e-2, critic_lr=1e-2), "cpu")
+    # the targets apart from the networks, as after some training (a target = its network
+    # would hide a target taken from the network being trained)
+    with torch.no_grad():
+        for net in (nets["actor_target"], nets["critic_target"]):
+            for p in net.parameters():
+                p.add_(0.3 * torch.randn_like(p))
+    batch = (torch.randn(4, 3), torch.rand(4, 1) * 4 - 2, torch.randn(4), torch.randn(4, 3),
+             t(1.0, 0.0, 1.0, 1.0))
+    return nets, batch, SimpleNamespace(gamma=0.9, tau=0.1)
+
+
+def ddpg_critic_mistakes(nets, batch, cfg):
+    obs, action, reward, next_obs, not_done = batch
+    c, a, ct, at = nets["critic"], nets["actor"], nets["critic_target"], nets["actor_target"]
+    with torch.no_grad():
+        q = c(obs, action)
+        return [(tr("the target from the networks being trained, Q(s', mu(s')), not the target "
+                    "networks Q'(s', mu'(s'))", "TD 目标用了正在训练的当前网络 Q(s', mu(s'))，"
+                    "不是目标网络 Q'(s', mu'(s'))"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * c(next_obs, a(next_obs)))),
+                (tr("the target from the critic being trained, Q(s', mu'(s')), not the target "
+                    "critic Q'", "TD 目标用了正在训练的评论员 Q(s', mu'(s'))，不是目标评论员 Q'"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * c(next_obs, at(next_obs)))),
+                (tr("the target's action from the actor being trained, mu(s'), not mu'(s')",
+                    "目标里的动作用了正在训练的演员 mu(s')，不是 mu'(s')"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * ct(next_obs, a(next_obs)))),
+                (tr("the target at s, not s' (obs and next_obs mixed up)",
+                    "目标在 s 处取值，不是 s'（obs 和 next_obs 弄混了）"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * ct(obs, at(obs)))),
+                (tr("Q(s', a) compared with the target (next_obs where obs belongs)",
+                    "用 Q(s', a) 去和目标比（该用 obs 的地方用了 next_obs）"),
+                 F.mse_loss(c(next_obs, action), reward + cfg.gamma * not_done * ct(
+                     next_obs, at(next_obs))))]
+
+
+def ddpg_update_keeping(nets, batch, cfg, kept):
+    """The script's update with one optimizer's zero_grad() left out (kept: "critic" or
+    "actor"): the gradients of the update before are added to this one's."""
+    ddpg = importlib.import_module("ddpg_walker")
+    actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets.values()
+    obs, action, reward, next_obs, not_done = batch
+    with torch.no_grad():
+        y = ddpg.td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)),
+                           cfg.gamma)
+    critic_loss = F.mse_loss(critic(obs, action), y)
+    if kept != "critic":
+        critic_opt.zero_grad()
+    critic_loss.backward()
+    critic_opt.step()
+    actor_loss = ddpg.compute_loss_actor(actor, critic, obs)
+    if kept != "actor":
+        actor_opt.zero_grad()
+    actor_loss.backward(inputs=list(actor.parameters()))
+    actor_opt.step()
+    ddpg.soft_update(critic_target, critic, cfg.tau)
+    ddpg.soft_update(actor_target, actor, cfg.tau)
+
+
+def gap(p, q):
+    return float((p - q).detach().abs().max())
+
+
+def worked_cases(fn):
+    own = importlib.import_module("ddpg_walker").ddpg_update
+    theirs, batch, cfg = small_ddpg()
+    yours = copy.deepcopy(theirs)
+    mistakes = ddpg_critic_mistakes(yours, batch, cfg)
+    with torch.no_grad():  # the actor's loss on the critic before its step: the steps swapped
+        actor_first = float(-yours["critic"](batch[0], yours["actor"](batch[0])).mean())
+    expected = own(*theirs.values(), batch, cfg)
+    got = fn(*yours.values(), batch, cfg)
+    case = tr("case: one update of tiny networks (3 states, 1 action, 4 samples, the second "
+              "terminated), gamma = 0.9, tau = 0.1, beside the script's own\n  ",
+              "例子：小网络上的一次更新（状态 3 维、动作 1 维、4 个样本，第二个终止），gamma = 0.9，"
+              "tau = 0.1，和脚本自己的并排比较\n  ")
+    if not isinstance(got, tuple) or len(got) != 2:
+        raise Failed(case + tr(f"expected (critic_loss, actor_loss), got {type(got).__name__}",
+                               f"应该返回 (critic_loss, actor_loss)，得到的是 {type(got).__name__}"))
+    for name in ("critic_target", "actor_target"):
+        if any(p.grad is not None for p in yours[name].parameters()):
+            raise Failed(case + tr(
+                f"a gradient reached {name}: the target was computed with the graph (put it "
+                f"under torch.no_grad(); the target is a constant)",
+                f"梯度传到了 {name}：TD 目标是带着计算图算的（放进 torch.no_grad()；目标是常数）"))
+    try:
+        compare("critic_loss", got[0], expected[0])
+    except Failed as e:
+        named = [label for label, value in mistakes if abs(float(got[0]) - float(value)) < 1e-5]
+        raise Failed(case + str(e) + (tr("\n  this is exactly what this mistake gives: ",
+                                         "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0]
+                                      if named else "")) from None
+    steps = [("critic", tr("the critic after its step", "评论员更新之后")),
+             ("actor", tr("the actor after its step", "演员更新之后")),
+             ("critic_target", tr("the critic's target after the soft update",
+                                  "软更新之后的目标评论员")),
+             ("actor_target", tr("the actor's target after the soft update",
+                                 "软更新之后的目标演员"))]
+    swapped_steps = ""
+    if any(torch.is_tensor(x) and x.requires_grad for x in got):
+        raise Failed(case + tr(
+            "the losses returned with their graph: return critic_loss.detach(), "
+            "actor_loss.detach() (the loop only logs them;\n  a graph kept with each would "
+            "hold every step's tensors)",
+            "返回的损失还带着计算图：应该 return critic_loss.detach(), actor_loss.detach()（循环"
+            "只是记录它们；\n  带着图，每一步的张量都不能释放）"))
+    try:
+        got_actor = float(got[1])
+    except (TypeError, ValueError, RuntimeError):
+        got_actor = math.nan
+    if abs(got_actor - float(expected[1])) > 1e-5 and abs(got_actor - actor_first) < 1e-5:
+        swapped_steps = tr("\n  this is exactly what this mistake gives: the actor's step taken "
+                           "before the critic's (the actor must learn from the updated critic)",
+                           "\n  你的值恰好是这个常见错误会得到的值：\n"
+                           "    演员在评论员之前更新了（演员要用更新过的评论员来学）")
+    for name, what in steps:
+        for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
+            if not torch.allclose(p, q, atol=1e-6):
+                hint = dict(
+                    critic=tr("one critic step toward y (critic_opt.zero_grad(), backward, step)",
+                              "朝 y 做一步评论员更新（critic_opt.zero_grad()、backward、step）"),
+                    actor=tr("the actor's step comes after the critic's, on the updated critic, "
+                             "and changes only the actor (backward(inputs=actor's parameters) "
+                             "or zero the critic's gradients)",
+                             "演员在评论员更新之后、用更新过的评论员来更新，并且只改演员"
+                             "（backward(inputs=演员的参数)，或者清掉评论员的梯度）"),
+                    critic_target=tr("soft_update(critic_target, critic, tau) after both steps",
+                                     "两步都做完之后 soft_update(critic_target, critic, tau)"),
+                    actor_target=tr("soft_update(actor_target, actor, tau) after both steps",
+                                    "两步都做完之后 soft_update(actor_target, actor, tau)"))[name]
+                raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
+                                       f"(largest difference {gap(p, q):.3g}): ",
+                                       f"{what}：{pname} 和脚本自己的不同（最大相差 "
+                                       f"{gap(p, q):.3g}）：") + hint
+                             + (swapped_steps if name == "actor" else ""))
+    try:
+        compare("actor_loss", got[1], expected[1])
+    except Failed as e:
+        raise Failed(case + str(e) + swapped_steps) from None
+    # A second update on another minibatch, right after: what the first left in a .grad shows
+    # here. The actor's backward without inputs= fills the critic's .grad too; harmless when
+    # the critic's step zeroes it first (as the script's does), not when it is zeroed after.
+    leftover = any(p.grad is not None and (q.grad is None or not torch.allclose(p.grad, q.grad))
+                   for p, q in zip(yours["critic"].parameters(), theirs["critic"].parameters()))
+    gen = torch.Generator().manual_seed(1)
+    batch2 = (torch.randn(4, 3, generator=gen), torch.rand(4, 1, generator=gen) * 4 - 2,
+              torch.randn(4, generator=gen), torch.randn(4, 3, generator=gen),
+              t(1.0, 1.0, 0.0, 1.0))
+    kept = {}  # what each zero_grad() left out gives, from the script's state after update 1
+    for name in ("critic", "actor"):
+        kept[name] = copy.deepcopy(theirs)  # deepcopy leaves .grad behind: copied here
+        for key in ("critic", "actor"):
+            for p, q in zip(kept[name][key].parameters(), theirs[key].parameters()):
+                p.grad = None if q.grad is None else q.grad.clone()
+        ddpg_update_keeping(kept[name], batch2, cfg, name)
+    expected, got = own(*theirs.values(), batch2, cfg), fn(*yours.values(), batch2, cfg)
+    case = tr("case: a second update right after the first, on another minibatch (the fourth "
+              "sample terminated)\n  ", "例子：紧接着第一次之后的第二次更新，换一个小批量（第四个样本"
+              "终止）\n  ")
+    for name, what in steps:
+        for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
+            if not torch.allclose(p, q, atol=1e-6):
+                named = tr(
+                    "\n  the first update left the actor's gradient in the critic's .grad (its "
+                    "backward without inputs=),\n  and the critic's next step added it in: "
+                    "backward(inputs=list(actor.parameters())), or\n  critic_opt.zero_grad() "
+                    "right before critic_loss.backward()",
+                    "\n  第一次更新把演员的梯度留在了评论员的 .grad 里（backward 没有写 inputs=），"
+                    "\n  评论员下一步更新时把它也加了进去：用 backward(inputs=list(actor.parameters()))，"
+                    "\n  或者紧挨着 critic_loss.backward() 之前调用 critic_opt.zero_grad()"
+                ) if name == "critic" and leftover else ""
+                if not named and name in kept and all(
+                        torch.allclose(a, b, atol=1e-6) for a, b in
+                        zip(yours[name].parameters(), kept[name][name].parameters())):
+                    opt = f"{name}_opt.zero_grad()"
+                    named = tr(f"\n  this is exactly what this mistake gives: gradients "
+                               f"accumulated across updates: {opt} missing\n    (backward() "
+                               f"adds to .grad; the first update's gradient was added to the "
+                               f"second's)",
+                               f"\n  你的值恰好是这个常见错误会得到的值：\n    梯度在两次更新之间"
+                               f"累加了：漏了 {opt}\n    （backward() 是往 .grad 上加；第一次更新"
+                               f"的梯度被加进了第二次的）")
+                raise Failed(case + tr(f"{what}: {pname} differs from the script's own "
+                                       f"(largest difference {gap(p, q):.3g})",
+                                       f"{what}：{pname} 和脚本自己的不同（最大相差 "
+                                       f"{gap(p, q):.3g}）") + named)
+    try:
+        compare("critic_loss", got[0], expected[0])
+        compare("actor_loss", got[1], expected[1])
+    except Failed as e:
+        raise Failed(case + str(e)) from None

@@ -1,0 +1,316 @@
+"""What the exercises' checks share (exercises/check.py runs them, exercises/cases/ holds each
+exercise's): the messages' language, the worked cases' tensors, the comparison of values and of
+gradients, and the run of a plain exercise's worked cases with its named mistakes."""
+
+import copy
+import inspect
+from types import SimpleNamespace
+
+import numpy as np
+import torch
+
+import help_zh
+
+# The messages' language: --lang zh|en, else the locale (LC_ALL, LC_MESSAGES, LANG: zh_CN.UTF-8
+# and the like give Chinese), else English. The terms are those of README.zh-CN.md's glossary.
+LANG = "en"
+
+
+def locale_lang():
+    return "zh" if help_zh.chinese_locale() else "en"  # the scripts' --help reads it alike
+
+
+def tr(en, zh):
+    """The message in the learner's language."""
+    return zh if LANG == "zh" else en
+
+
+class Failed(Exception):
+    """A stage failed: the message says what differs."""
+
+
+def t(*rows):
+    return torch.tensor(rows, dtype=torch.float32)
+
+
+def scalar(x):
+    return torch.tensor(x, dtype=torch.float32)
+
+
+def flags(*rows):
+    return torch.tensor(rows, dtype=torch.bool)
+
+
+class Fixed(torch.nn.Module):
+    """A 'network' that returns the same outputs for any batch of observations; `names` say
+    what each output is, for the messages about its gradient."""
+
+    def __init__(self, *outputs, names=()):
+        super().__init__()
+        self.outputs = [torch.nn.Parameter(o.clone()) for o in outputs]
+        self.names = list(names) + [f"output {i}" for i in range(len(names), len(outputs))]
+        for i, p in enumerate(self.outputs):
+            self.register_parameter(f"out{i}", p)
+
+    def forward(self, obs):
+        # o * 1, not o: a new tensor from the graph, as a network's output is, so that an
+        # output computed under torch.no_grad() carries no gradient here either
+        out = [o * 1 for o in self.outputs]
+        return out[0] if len(out) == 1 else tuple(out)
+
+
+def logits_names():
+    return (tr("pi's logits", "π 的 logits"),)
+
+
+def as_list(x):
+    """A returned obs or mask as plain numbers, or None if it is not one (a tuple from
+    env.reset(), say)."""
+    if x is None:
+        return None
+    try:
+        return np.asarray(x, dtype=np.float64).tolist()
+    except (TypeError, ValueError):
+        return None
+
+
+def error(e, first_line=False):
+    """An exception raised by the learner's code: its type, then its message (Python's own
+    words, in English), after the language's colon."""
+    text = str(e).splitlines()[0] if first_line and str(e) else str(e)
+    return f"{type(e).__name__}" + (tr(": ", "：") + text if text else "")
+
+
+def compare(name, got, expected):
+    """Raise Failed at the first difference between `got` and `expected` (tensors or numbers)."""
+    if expected is None:
+        return
+    if isinstance(expected, dict):
+        for key, value in expected.items():
+            compare(f"{name}[{key!r}]", got.get(key) if isinstance(got, dict) else None, value)
+        return
+    if torch.is_tensor(expected):
+        if not torch.is_tensor(got):
+            raise Failed(tr(f"{name}: expected a tensor of shape {tuple(expected.shape)}, got "
+                            f"{type(got).__name__} {got!r}",
+                            f"{name}：应该是形状为 {tuple(expected.shape)} 的张量，得到的是 "
+                            f"{type(got).__name__} {got!r}"))
+        if got.shape != expected.shape:
+            raise Failed(tr(f"{name}: expected shape {tuple(expected.shape)}, got "
+                            f"{tuple(got.shape)} (a (B, 1) against a (B,) broadcasts silently)",
+                            f"{name}：形状应该是 {tuple(expected.shape)}，得到的是 "
+                            f"{tuple(got.shape)}（(B, 1) 和 (B,) 相减会悄悄广播成 (B, B)）"))
+        close = torch.isclose(got.detach().float(), expected, atol=1e-5, rtol=1e-5)
+        if not close.all() and expected.dim() == 0:
+            raise Failed(tr(f"{name}: expected {expected.item():.6g}, got {got.item():.6g}",
+                            f"{name}：应该是 {expected.item():.6g}，得到的是 {got.item():.6g}"))
+        if not close.all():
+            wrong = [tuple(int(k) for k in i) for i in (~close).nonzero()]
+            i = wrong[0]
+            also = (tr(" (all that differ: ", "（所有不同的位置：") + ", ".join(map(str, wrong[:8]))
+                    + tr(")", "）")) if len(wrong) > 1 else ""
+            raise Failed(tr(f"{name}: first difference at index {i}: expected "
+                            f"{expected[i].item():.6g}, got {got[i].item():.6g}{also}",
+                            f"{name}：第一个不同在下标 {i}：应该是 {expected[i].item():.6g}，"
+                            f"得到的是 {got[i].item():.6g}{also}")
+                         + tr("\n  expected ", "\n  应该是 ") + str(rounded(expected))
+                         + tr("\n  got      ", "\n  得到的是 ") + str(rounded(got)))
+        return
+    if not isinstance(got, (int, float)) or abs(float(got) - float(expected)) > 1e-5:
+        raise Failed(tr(f"{name}: expected {expected:.6g}, got {got!r}",
+                        f"{name}：应该是 {expected:.6g}，得到的是 {got!r}"))
+
+
+def rounded(x):
+    """A tensor as nested lists of numbers to 6 significant digits (float32's noise left out)."""
+    x = x.detach().tolist()
+    if isinstance(x, list) and x and isinstance(x[0], list):
+        return [rounded(torch.tensor(v)) for v in x]
+    return [float(f"{v:.6g}") for v in x] if isinstance(x, list) else float(f"{x:.6g}")
+
+
+def show(ex, args):
+    """The case's inputs, named as the function's parameters: tensors as lists, a batch dict
+    by its keys, networks and settings left out."""
+    def one(a):
+        if isinstance(a, dict):
+            return "{" + ", ".join(f"{k}: {one(v)}" for k, v in a.items() if k != "obs") + "}"
+        if torch.is_tensor(a):
+            return str(a.tolist() if not a.is_floating_point() else rounded(a))
+        return repr(a)
+    names = inspect.signature(getattr(ex.owner(), ex.function)).parameters
+    return ", ".join(f"{name}={one(a)}" for name, a in zip(names, args)
+                     if not callable(a) and not isinstance(a, SimpleNamespace))
+
+
+def same_value(got, value):
+    """True where `got` is `value`: tensors of one shape, close; or numbers, equal."""
+    try:
+        if torch.is_tensor(value):
+            return (torch.is_tensor(got) and got.shape == value.shape
+                    and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5))
+        return isinstance(got, (int, float)) and abs(got - value) < 1e-9
+    except (TypeError, RuntimeError):
+        return False
+
+
+def same_outputs(got, value):
+    """`value` a tuple (a mistake's outputs, None where any will do): each output matches;
+    else the first output (or `got` itself) is `value`."""
+    if isinstance(value, tuple):
+        return (isinstance(got, tuple) and len(got) >= len(value)
+                and all(v is None or same_value(g, v) for g, v in zip(got, value)))
+    return same_value(got[0] if isinstance(got, tuple) else got, value)
+
+
+def named_mistake(ex, args, got, fn=None, expected=None):
+    """The name of a known mistake whose value `got` (the function's first output, or all of
+    them where the mistake gives a tuple) is, or ''. A mistake that gives the right value
+    (`expected`) in this case is never named: a wrong gradient with the right value is not it."""
+    if ex.mistakes is None:
+        return ""
+    mistakes = ex.mistakes(*args)
+    if ex.narrow_mistakes and fn is not None:  # several mistakes, one value in this case
+        mistakes = ex.narrow_mistakes(mistakes, fn)
+    for label, value in mistakes:
+        if value is None:  # this mistake gives the right value in this case
+            continue
+        if expected is not None and same_outputs(expected, value):
+            continue
+        if same_outputs(got, value):
+            return tr("\n  this is exactly what this mistake gives: ",
+                      "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
+    return ""
+
+
+def check_cases(ex, fn):
+    """Stage (a) of a plain exercise: its function on each worked case (cases/<name>.py's
+    cases()), the value, then the gradient; a wrong value that a named mistake gives is named."""
+    for what, args, expected in ex.cases():
+        saved = [a.clone() if torch.is_tensor(a) else a for a in args]
+        try:
+            got = fn(*args)
+        except RuntimeError as e:
+            named = ex.named_error(e) if ex.named_error else ""
+            if named:
+                raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
+                             + f"{show(ex, args)}\n  " + tr("your function raised ", "你的函数抛出了 ")
+                             + error(e) + named) from None
+            raise
+        for a, b in zip(args, saved):
+            if torch.is_tensor(a) and not torch.equal(a, b):
+                raise Failed(tr(f"{what}: your function changed one of its inputs in place",
+                                f"{what}：你的函数原地改了它的一个输入"))
+        try:
+            if isinstance(expected, tuple):
+                if not isinstance(got, tuple) or len(got) < len(expected):
+                    raise Failed(tr(f"expected a tuple of {len(expected)}, got "
+                                    f"{type(got).__name__}",
+                                    f"应该返回 {len(expected)} 个值的元组，得到的是 "
+                                    f"{type(got).__name__}"))
+                for i, e in enumerate(expected):
+                    compare(ex.outputs[i], got[i], e)
+            else:
+                compare(ex.outputs[0], got, expected)
+            compare_gradients(ex, fn, args)
+        except Failed as e:
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
+                         + f"{show(ex, args)}\n  {e}"
+                         + named_mistake(ex, args, got, fn, expected)) from None
+
+
+def gradients(f, args, parameters, index=0):
+    """{network output's name: its gradient} after backward() of f(*args)'s loss (its output
+    `index`, the first by default), on copies of the case's inputs; None if the loss carries no
+    gradient at all."""
+    args = copy.deepcopy(args)
+    out = f(*args)
+    loss = out[index] if isinstance(out, tuple) and len(out) > index else out
+    if not (torch.is_tensor(loss) and loss.requires_grad):
+        return None
+    loss.backward()
+    leaves = [(name, p) for a in args if isinstance(a, Fixed)
+              for name, p in zip(a.names, a.outputs)]
+    leaves += [(name, a) for name, a in zip(parameters, args)
+               if torch.is_tensor(a) and a.requires_grad]
+    return {name: torch.zeros_like(p) if p.grad is None else p.grad for name, p in leaves}
+
+
+def compare_gradients(ex, fn, args):
+    """Where values cannot tell, the gradient can: the loss's gradient with respect to each
+    network output of the case, yours against the script's own function's. An exercise whose
+    function returns several losses (ex.losses: their indices among its outputs) has each one's
+    gradient compared, the message saying which."""
+    if not any(isinstance(a, Fixed) or torch.is_tensor(a) and a.requires_grad for a in args):
+        return
+    own = getattr(ex.owner(), ex.function)
+    parameters = list(inspect.signature(own).parameters)
+    losses = getattr(ex, "losses", (0,))
+    for index in losses:
+        loss = ex.outputs[index]
+        reference = gradients(own, args, parameters, index)
+        if reference is None:
+            continue
+        yours = gradients(fn, args, parameters, index)
+        try:
+            compare_loss_gradients(reference, yours, lambda kind: gradient_named(ex, loss, kind))
+        except Failed as e:
+            raise Failed((tr(f"{loss}: ", f"{loss}：") if len(losses) > 1 else "") + str(e)) \
+                from None
+
+
+def gradient_named(ex, loss, kind):
+    """The mistake a gradient failure of this kind ("cut", "stray": where none belongs) of the
+    output `loss` shows, as a line to add to the message, or ''."""
+    hook = getattr(ex, "gradient_mistake", None)
+    label = hook(loss, kind) if hook else ""
+    if not label and kind == "cut" and getattr(ex, "cut", None):
+        label = ex.cut()
+    return (tr("\n  this is exactly what this mistake does: ",
+               "\n  这正是这个常见错误的表现：\n    ") + label) if label else ""
+
+
+def compare_loss_gradients(reference, yours, named):
+    """One loss's gradients, yours against the reference's; `named(kind)`: the known mistake's
+    line, or ''."""
+    if yours is None:
+        raise Failed(tr(
+            "gradient cut: your loss has the right value and carries no gradient at all (it was "
+            "computed\n  under torch.no_grad(), from .item() or .detach(), or from a tensor made "
+            "anew): the optimizer\n  would change nothing",
+            "梯度被切断：你的损失数值对，但完全不带梯度（它是在 torch.no_grad() 下算的，或经过了 "
+            ".item()、\n  .detach()，或由新建的张量算出）：优化器什么也改不了") + named("cut"))
+    for name, r in reference.items():
+        g = yours[name]
+        if torch.allclose(g, r, atol=1e-6, rtol=1e-4):
+            continue
+        if r.abs().max() > 1e-8 and g.abs().max() <= 1e-8:
+            raise Failed(tr(
+                f"gradient cut: the value is right, and no gradient reaches {name} (a .detach(), "
+                f"or a tensor made\n  anew, on the way from {name} to the loss): expected "
+                f"{rounded(r)}, got zeros",
+                f"梯度被切断：数值对，但梯度传不到 {name}（从 {name} 到损失的路上有 .detach() "
+                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0") + named("cut"))
+        if r.abs().max() <= 1e-8:
+            raise Failed(tr(
+                f"a gradient where none belongs: the value is right, and your loss sends a "
+                f"gradient into {name},\n  which this loss must not train (a quantity that "
+                f"should be a constant, e.g. an advantage\n  recomputed from the live network, "
+                f"carries it): "
+                f"got {rounded(g)}, expected zeros",
+                f"多出来的梯度：数值对，但你的损失把梯度传进了 {name}，这个损失不该训练它（本该是常数的"
+                f"量带着梯度，\n  例如用正在训练的网络重新算的优势）：得到 {rounded(g)}，应该是 0")
+                + named("stray"))
+        if torch.allclose(g, -r, atol=1e-6, rtol=1e-4):
+            raise Failed(tr(
+                f"gradient reversed: the value is right, and the gradient with respect to {name} "
+                f"has the\n  opposite sign: training would move it the wrong way: expected "
+                f"{rounded(r)}, got {rounded(g)}",
+                f"梯度方向反了：数值对，但对 {name} 的梯度符号相反，训练会把它往反方向推：\n  应该是 "
+                f"{rounded(r)}，得到的是 {rounded(g)}"))
+        raise Failed(tr(
+            f"wrong gradient: the value is right, and the gradient with respect to {name} is "
+            f"not the loss's:\n  expected {rounded(r)}, got {rounded(g)} (a term that should "
+            f"be a constant, or one cut\n  from the graph, changes it)",
+            f"梯度不对：数值对，但对 {name} 的梯度不是这个损失的梯度：\n  应该是 {rounded(r)}，得到的是 "
+            f"{rounded(g)}（某一项该是常数却带着梯度，或者该带梯度却被切断了）"))
