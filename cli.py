@@ -109,9 +109,9 @@ class CheckpointFlags(OutputFlags):
     """write before.gif (untrained actor), after.gif (trained actor) and best.gif (the best
     evaluation so far, refreshed as it improves) to the run folder"""
     curves: bool = True
-    """write curve.png (evaluation returns against env steps) and inside.png (the critic's
-    Q against the discounted return really obtained from the same states, and more where the
-    algorithm has more inside: docs/inside.md) at every evaluation"""
+    """write curve.png (evaluation returns against env steps) and inside.png (what the updates
+    do inside the algorithm, e.g. a critic's Q against the discounted return really obtained
+    from the same states: docs/inside.md) at every evaluation"""
     checkpoint_every: int = 25_000
     """write checkpoint.pt (networks, optimizers, replay buffer, random generators, logs) every
     this many env steps and on Ctrl-C; --resume continues from it"""

@@ -1,7 +1,8 @@
 """What the scripts share and a reader reads beside them: discounted returns and GAE (with
 worked examples), running statistics to normalise with, running a policy (evaluation), what
-the pictures of inside.png measure, making the envs, and at the end the small tools everything else builds on (one-line errors,
-SIGTERM as Ctrl-C, whole-file writes). It imports no other module of this project.
+the pictures of inside.png measure, making the envs, and at the end the small tools everything
+else builds on (one-line errors, SIGTERM as Ctrl-C, whole-file writes). It imports no other
+module of this project.
 
 The training loops live in the scripts, each read top to bottom on its own. What a reader
 may skip is in cli.py (flags), runlog.py (run folders, logs), checkpoints.py (saving, exact

@@ -21,7 +21,7 @@ The loop in train(), top to bottom:
 中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，正是教程 002
 所在专栏（“实现机械臂reach某点之PPO算法实现”）的任务。策略是高斯分布 N(mu(s), sigma^2)，
 对数概率在动作的各维上求和；更新照教程 002 的 update()：整批数据上最多 train_pi_iters 步策略
-更新，approx_kl 超过 1.5 倍 target_kl 就提前停止，再做 train_v_iters 步价值更新。--update
+更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 步价值更新。--update
 minibatch 换成 ppo_cartpole.py 的小批量多轮更新。
 """
 
@@ -137,7 +137,7 @@ class Config(cli.CheckpointFlags):
     multiple of this many env steps"""
     # --- collection ---
     num_envs: int = 1
-    """parallel envs (Spinning Up and tutorial 002: 1; must divide the step counts above)"""
+    """parallel envs (Spinning Up and tutorial 002: 1; must divide --print-every)"""
     num_steps: int = 4000
     """steps per env per rollout (tutorial 002's steps_per_epoch: 4000; 1000 .. 8000)"""
     gamma: float = 0.99
