@@ -370,14 +370,16 @@ LOGGED = dict(loss_pi=(None, "-L_CLIP before the update"), loss_v=(None, "L_VF b
 
 
 def pictures(cfg):
-    """inside.png: sigma shrinking (exploration), the fingertip's distance, the policy steps
-    the early stop allowed, r against [1 - eps, 1 + eps] (docs/inside.md)."""
+    """inside.png (docs/inside.md): sigma shrinking (exploration), the fingertip's distance, the
+    policy steps the early stop allowed; r against [1 - eps, 1 + eps], how far pi moved."""
     band = (1 - cfg.clip_ratio, 1 + cfg.clip_ratio)
     return dict(inside=[
         [plots.lines("std_min", "std_max", title="exploration: sigma of pi"),
-         plots.lines("distance", title="reaching: distance at the end (Reacher)")],
+         plots.lines("distance", title="reaching: distance at the end (Reacher)"),
+         plots.lines("pi_steps", title="policy steps on the last batch")],
         [plots.spread("ratio", "r = pi/pi_old after the last update; dashed: 1 -+ eps", band),
-         plots.lines("pi_steps", "approx_kl", title="the last update")]])
+         plots.lines("approx_kl", title="approx_kl after the last update"),
+         plots.lines("clipfrac", title="clipfrac after the last update")]])
 
 
 SMOKE = dict(total_timesteps=600, num_steps=100, eval_every=200, eval_episodes=1,
