@@ -10,7 +10,7 @@ Two ways to spend one batch of 4000 steps, the rest of ppo_reacher.py alike (its
 What to look for: the evaluation return of the mean action (gymnasium's reward threshold for
 Reacher is -3.75); how many policy steps each scheme takes before the early stop ends them
 (pi_steps), how far pi moves per batch (approx_kl after the update) and how fast sigma
-shrinks (std_max). 300,000 steps each (a third of the default budget: where the curves
+shrinks (std_max). 200,000 steps each (a fifth of the default budget: where the curves
 separate, if they do; docs/results.md has the 1M runs), an evaluation every 20,000 steps.
 
     python experiments/ppo_update_scheme.py            # 2 variants x 5 seeds
@@ -30,7 +30,7 @@ PANELS = [("pi_steps", "policy steps taken on each batch", False),
           ("std_max", "sigma, largest dimension", False)]
 
 if __name__ == "__main__":
-    lab.main("ppo_update_scheme", ppo_reacher, VARIANTS, budget=300_000, solved=-3.75,
+    lab.main("ppo_update_scheme", ppo_reacher, VARIANTS, budget=200_000, solved=-3.75,
              what="evaluation return (the mean action)", quick_budget=1000, panels=PANELS,
              quick_settings=dict(num_steps=250, eval_every=500, train_pi_iters=5,
                                  train_v_iters=5), eval_every=20_000)
