@@ -55,7 +55,7 @@ def exercise(name, m):
     """The exercise `name` as the stages see it, from its checks' module `m` (cases/<name>.py):
     what it does not say takes the default."""
     return SimpleNamespace(
-        name=name, script=m.SCRIPT, function=m.FUNCTION,
+        name=name, script=m.SCRIPT, function=m.FUNCTION, checks=f"exercises/cases/{name}.py",
         owner=lambda: importlib.import_module(getattr(m, "OWNER", m.SCRIPT)), run=m.RUN,
         loop=m.LOOP, learn=m.LEARN, loop_hint=m.loop_hint, order=m.ORDER,
         outputs=getattr(m, "OUTPUTS", ("output",)), cases=getattr(m, "cases", list),

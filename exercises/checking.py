@@ -143,12 +143,20 @@ def show(ex, args):
                      if not callable(a) and not isinstance(a, SimpleNamespace))
 
 
+def only_if(applies, value):
+    """A mistake's value in a case that can tell it from the right answer, else None: a
+    mistake that gives the right value in a case says so, and is neither checked nor named
+    there (check_cases refuses a case where a listed one gives the right value unmarked)."""
+    return value if applies else None
+
+
 def same_value(got, value):
     """True where `got` is `value`: tensors of one shape, close; or numbers, equal."""
     try:
         if torch.is_tensor(value):
             return (torch.is_tensor(got) and got.shape == value.shape
-                    and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5))
+                    and torch.allclose(got.detach().float(), value.float(), atol=1e-5, rtol=1e-5,
+                                   equal_nan=True))
         return isinstance(got, (int, float)) and abs(got - value) < 1e-9
     except (TypeError, RuntimeError):
         return False
@@ -163,30 +171,74 @@ def same_outputs(got, value):
     return same_value(got[0] if isinstance(got, tuple) else got, value)
 
 
-def named_mistake(ex, args, got, fn=None, expected=None):
-    """The name of a known mistake whose value `got` (the function's first output, or all of
-    them where the mistake gives a tuple) is, or ''. A mistake that gives the right value
-    (`expected`) in this case is never named: a wrong gradient with the right value is not it."""
-    if ex.mistakes is None:
-        return ""
+def listed_mistakes(ex, args, fn=None):
+    """(label, value) of each named mistake in the case `args` (None: not told apart there)."""
     mistakes = ex.mistakes(*args)
     if ex.narrow_mistakes and fn is not None:  # several mistakes, one value in this case
         mistakes = ex.narrow_mistakes(mistakes, fn)
-    for label, value in mistakes:
+    return mistakes
+
+
+def named_mistake(ex, args, got, fn=None, expected=None):
+    """The name of a known mistake whose value `got` (the function's first output, or all of
+    them where the mistake gives a tuple) is, or ''. A mistake that gives the right value
+    (`expected`) in this case is never named: a wrong gradient with the right value is not it.
+    Nor is one that `fn` does not give in every other case where it is computed: one case
+    alone may not tell two mistakes apart, and an unnamed mistake is better than a misnamed
+    one."""
+    if ex.mistakes is None:
+        return ""
+    for label, value in listed_mistakes(ex, args, fn):
         if value is None:  # this mistake gives the right value in this case
             continue
         if expected is not None and same_outputs(expected, value):
             continue
-        if same_outputs(got, value):
+        if same_outputs(got, value) and (fn is None or in_every_case(ex, fn, label)):
             return tr("\n  this is exactly what this mistake gives: ",
                       "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
     return ""
 
 
+def in_every_case(ex, fn, label):
+    """True where `fn` gives the mistake `label`'s value in every worked case that computes it
+    (on fresh inputs)."""
+    for _, args, _ in ex.cases():
+        value = dict(listed_mistakes(ex, args, fn)).get(label)
+        if value is None:
+            continue
+        try:
+            got = fn(*args)
+        except Exception:  # noqa: BLE001  an answer that raises on a case is not that mistake
+            return False
+        if not same_outputs(got, value):
+            return False
+    return True
+
+
+class CheckerFault(Failed):
+    """The exercise's checks are at fault, not the learner's answer."""
+
+
+def audit(ex, cases):
+    """Refuse a worked case on which a listed mistake gives the right answer without saying so
+    (only_if): the case could not catch that mistake, and naming would then go astray."""
+    for what, args, expected in cases:
+        for label, value in ex.mistakes(*args) if ex.mistakes else ():
+            if value is not None and same_outputs(expected, value):
+                raise CheckerFault(tr(
+                    "this is the checker's fault, not yours: please report it.\n  ",
+                    "这是检查程序的问题，不是你的：请报告它。\n  ") + (
+                    f"{ex.checks}: in the case \"{what}\", the listed mistake \"{label}\" "
+                    f"gives the right answer: change the case so that it tells them apart, or "
+                    f"have mistakes() give None for it there (checking.only_if)"))
+
+
 def check_cases(ex, fn):
     """Stage (a) of a plain exercise: its function on each worked case (cases/<name>.py's
     cases()), the value, then the gradient; a wrong value that a named mistake gives is named."""
-    for what, args, expected in ex.cases():
+    cases = ex.cases()
+    audit(ex, cases)
+    for what, args, expected in cases:
         saved = [a.clone() if torch.is_tensor(a) else a for a in args]
         try:
             got = fn(*args)

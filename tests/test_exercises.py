@@ -62,7 +62,8 @@ WRONG = {
         ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
                 returns, future = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
                 for t in reversed(range(len(rewards))):  # no bootstrap at the cut
-                    future = torch.where(terminated[t] | truncated[t], 0.0, future)
+                    future = torch.where(truncated[t], next_values[t], future)
+                    future = torch.where(terminated[t], 0.0, future)
                     returns[t] = future = rewards[t] + gamma * future
                 return returns""", "(a)", "no bootstrap at the rollout's end"),
         ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
@@ -191,7 +192,7 @@ WRONG = {
                     return beta / cfg.beta_factor
                 if d > cfg.d_targ * cfg.kl_tolerance:
                     return beta * cfg.beta_factor
-                return beta""", "(a)", "<= or >= at the band's edges"),
+                return beta""", "(a)", "<= at the band's lower edge"),
         ("""def adapt_beta(beta, d, cfg):  # the tolerance as the factor
                 if d < cfg.d_targ / cfg.kl_tolerance:
                     return beta / cfg.kl_tolerance
@@ -1189,4 +1190,48 @@ def test_a_mistake_that_gives_the_right_value_names_nothing():
     source = WRONG["grpo_loss"][-1][0]
     passed, lines = run("grpo_loss", compile_answer(source, "grpo_loss"))
     assert not passed and "wrong gradient" in lines[-1], lines
+    assert "this is exactly what this mistake" not in lines[-1], lines[-1]
+
+
+PLAIN = [name for name, ex in check.EXERCISES.items()
+         if not ex.worked_cases and ex.mistakes and name not in check.BUGS]
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("name", PLAIN)
+def test_every_listed_mistake_is_wrong_on_every_case_that_computes_it(name):
+    """Where a case cannot tell a listed mistake from the right answer, the mistake says so
+    (checking.only_if gives None there); nowhere else may it give the right answer."""
+    ex = check.EXERCISES[name]
+    checking.audit(ex, ex.cases())
+
+
+@pytest.mark.quick
+def test_a_case_on_which_a_listed_mistake_is_right_is_refused():
+    """A mistake that gives the right answer on a case, unmarked, stops stage (a) with a line
+    for the maintainer, whatever the answer."""
+    ex = check.EXERCISES["td_target"]
+    right = ex.cases()[0][2]
+    broken = check.SimpleNamespace(**{**vars(ex), "mistakes": lambda *args: [("planted", right)]})
+    with pytest.raises(checking.CheckerFault, match='mistake "planted" gives the right answer'):
+        checking.check_cases(broken, getattr(ex.owner(), ex.function))
+    passed, lines = run("td_target", getattr(ex.owner(), ex.function))
+    assert passed, lines
+
+
+TWO_SLIPS = """def discounted_returns(rewards, next_values, terminated, truncated, gamma):
+                returns, future = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
+                for t in reversed(range(len(rewards))):  # no bootstrap, a truncation as an end
+                    future = torch.where(terminated[t] | truncated[t], 0.0, future)
+                    returns[t] = future = rewards[t] + gamma * future
+                return returns"""
+
+
+@pytest.mark.quick
+def test_a_mistake_is_named_only_where_every_case_agrees():
+    """Two slips at once give "no bootstrap at the rollout's end"'s value on the first case
+    and another on the truncated ones: neither is named (an unnamed mistake is better than a
+    misnamed one); the first slip alone is named (WRONG["discounted_returns"])."""
+    passed, lines = run("discounted_returns", compile_answer(TWO_SLIPS, "discounted_returns"))
+    assert not passed and "no episode ends" in lines[-1], lines
     assert "this is exactly what this mistake" not in lines[-1], lines[-1]

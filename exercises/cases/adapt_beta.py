@@ -3,7 +3,7 @@ mistakes and its runs."""
 
 from types import SimpleNamespace
 
-from checking import tr
+from checking import only_if, tr
 import runs
 
 SCRIPT = "ppo_kl_cartpole"
@@ -29,11 +29,15 @@ def cases():
 
 def mistakes(beta, d, cfg):
     lo, hi = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance
+    outside = d < lo or d > hi
     return [(tr("the two rules swapped: beta must shrink when d is small, grow when it is large",
                 "两条规则反了：d 小时 β 应该变小，d 大时变大"),
-             beta * cfg.beta_factor if d < lo else beta / cfg.beta_factor if d > hi else beta),
+             only_if(outside, beta * cfg.beta_factor if d < lo else beta / cfg.beta_factor)),
             (tr("the tolerance (1.5) used as the factor (2)", "把容差（1.5）当成了倍数（2）"),
-             beta / cfg.kl_tolerance if d < lo else beta * cfg.kl_tolerance if d > hi else beta),
-            (tr("<= or >= at the band's edges, where the paper's rules are strict (< and >)",
-                "区间边界用了 <= 或 >=，论文的规则是严格的 < 和 >"),
-             beta / cfg.beta_factor if d <= lo else beta * cfg.beta_factor if d >= hi else beta)]
+             only_if(outside, beta / cfg.kl_tolerance if d < lo else beta * cfg.kl_tolerance)),
+            (tr("<= at the band's lower edge, where the paper's rules are strict (< and >)",
+                "区间下边界用了 <=，论文的规则是严格的 < 和 >"),
+             only_if(d == lo, beta / cfg.beta_factor)),
+            (tr(">= at the band's upper edge, where the paper's rules are strict (< and >)",
+                "区间上边界用了 >=，论文的规则是严格的 < 和 >"),
+             only_if(d == hi, beta * cfg.beta_factor))]

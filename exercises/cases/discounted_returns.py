@@ -3,7 +3,7 @@ is cut (A2C's n-step targets): its worked cases, its named mistakes and its runs
 
 import torch
 
-from checking import tr, t, flags
+from checking import flags, only_if, t, tr
 import runs
 
 SCRIPT = "actor_critic_cartpole"
@@ -65,24 +65,26 @@ def returns_with(r, nv, term, trunc, gamma, cut=True, trunc_boots=True, term_win
 
 
 def mistakes(r, nv, term, trunc, gamma):
+    cut, both = (trunc & ~term).any(), (trunc & term).any()  # what the case has
     return [(tr("no bootstrap at the rollout's end (after step T - 1 the future is V(s_T), not 0)",
                 "这批数据的末尾没有自举（第 T - 1 步之后的未来是 V(s_T)，不是 0）"),
              returns_with(r, nv, term, trunc, gamma, cut=False)),
             (tr("a time-limit truncation treated as a termination (no bootstrap there)",
                 "把时间截断当成了终止（那里没有自举）"),
-             returns_with(r, nv, term, trunc, gamma, trunc_boots=False)),
+             only_if(cut, returns_with(r, nv, term, trunc, gamma, trunc_boots=False))),
             (tr("truncation ignored: the sum runs on past a truncation into the next episode "
                 "(there the future is V(final obs) = next_values[t])",
                 "忽略了时间截断：累加越过了时间截断，进入了下一个回合（那里的未来是 "
                 "V(最后的观测) = next_values[t]）"),
-             returns_with(r, nv, term, torch.zeros_like(trunc), gamma)),
+             only_if(cut, returns_with(r, nv, term, torch.zeros_like(trunc), gamma))),
             (tr("truncation wins where both flags are set (termination must win)",
                 "两个标志都在时按时间截断算了（应该按终止算）"),
-             returns_with(r, nv, term, trunc, gamma, term_wins=False)),
+             only_if(both, returns_with(r, nv, term, trunc, gamma, term_wins=False))),
             (tr("at a truncation, the value of the step before, next_values[t - 1], where "
                 "V(final obs) is next_values[t]", "时间截断处用了前一步的 next_values[t - 1]，"
                 "V(最后的观测) 是 next_values[t]"),
-             returns_with(r, nv, term, trunc, gamma, shift=1)),
+             only_if(cut, returns_with(r, nv, term, trunc, gamma, shift=1))),
             (tr("the future is not reset where an episode terminated (the next episode's "
                 "rewards leak in)", "回合终止处没有把未来清零（下一个回合的奖励漏了进来）"),
-             returns_with(r, nv, term, trunc, gamma, term_resets=False))]
+             only_if(term[:-1].any(), returns_with(r, nv, term, trunc, gamma,
+                                                   term_resets=False)))]

@@ -3,7 +3,7 @@ mistakes and its runs."""
 
 import torch
 
-from checking import tr, t, flags
+from checking import flags, only_if, t, tr
 import runs
 
 SCRIPT = "ppo_cartpole"
@@ -70,27 +70,30 @@ def gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=True, cut_at_trunc=T
 
 
 def mistakes(r, v, nv, term, trunc, gamma, lam):
+    cut, both = (trunc & ~term).any(), (trunc & term).any()  # what the case has
+    carried = (~(term | trunc))[:-1].any()  # some A_{t+1} is added in
     return [(tr("a time-limit truncation treated as a termination in delta (no bootstrap there)",
                 "在 delta 里把时间截断当成了终止（那里没有自举）"),
-             gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=False)),
+             only_if(cut, gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=False))),
             (tr("the sum runs on past a truncation (what follows belongs to the next episode)",
                 "累加越过了时间截断（后面属于下一个回合）"),
-             gae_with(r, v, nv, term, trunc, gamma, lam, cut_at_trunc=False)),
+             only_if(cut, gae_with(r, v, nv, term, trunc, gamma, lam, cut_at_trunc=False))),
             (tr("truncation wins where both flags are set: delta bootstraps at a termination",
                 "两个标志都在时按时间截断算了：终止处的 delta 还在自举"),
-             gae_with(r, v, nv, term, trunc, gamma, lam, term_wins=False)),
+             only_if(both, gae_with(r, v, nv, term, trunc, gamma, lam, term_wins=False))),
             (tr("lam left out of the sum (gamma * A_{t+1}, not gamma * lam * A_{t+1})",
                 "累加时漏了 lam（写成了 gamma * A_{t+1}，应该是 gamma * lam * A_{t+1}）"),
-             gae_with(r, v, nv, term, trunc, gamma, 1.0)),
+             only_if(carried and lam != 1, gae_with(r, v, nv, term, trunc, gamma, 1.0))),
             (tr("gamma * lam left out of the sum (A_t = delta_t + A_{t+1}: tutorial 000's bug)",
                 "累加时整个漏了 gamma * lam（写成了 A_t = delta_t + A_{t+1}：这正是教程 000 的错误，"
                 "见 README.zh-CN.md 路线一第 3 步）"),
-             gae_with(r, v, nv, term, trunc, gamma, 1.0 / gamma)),
+             only_if(carried, gae_with(r, v, nv, term, trunc, gamma, 1.0 / gamma))),
             (tr("V(s_t) where V(s_{t+1}) belongs in delta (values[t], not next_values[t])",
                 "delta 里用了 V(s_t)，应该是 V(s_{t+1})（用了 values[t]，不是 next_values[t]）"),
              gae_with(r, v, nv, term, trunc, gamma, lam, next_v=False)),
             (tr("the sum is not cut where an episode ended", "回合结束处没有切断累加"),
-             gae_with(r, v, nv, term, trunc, gamma, lam, term_resets=False)),
+             only_if(term[:-1].any(), gae_with(r, v, nv, term, trunc, gamma, lam,
+                                               term_resets=False))),
             (tr("values[t + 1] where next_values[t] belongs: use next_values; they coincide "
                 "with values[t + 1] in this project's\n    loops (NEXT_STEP autoreset stores the "
                 "final obs at t + 1), not under every autoreset convention\n    (e.g. where the "
@@ -98,4 +101,5 @@ def mistakes(r, v, nv, term, trunc, gamma, lam):
                 "用了 values[t + 1]，应该是 next_values[t]：要用 next_values。在本项目的循环里"
                 "两者相同\n    （NEXT_STEP 自动重置在 t + 1 处存的是最后的观测），但不是每种自动重置方式"
                 "都这样\n    （例如最后的观测另外存放，t + 1 处是下一个回合的第一个观测）"),
-             gae_with(r, v, nv, term, trunc, gamma, lam, shifted=True))]
+             only_if(not torch.equal(nv[:-1], v[1:]),
+                     gae_with(r, v, nv, term, trunc, gamma, lam, shifted=True)))]

@@ -3,7 +3,7 @@ group: its worked cases, its named mistakes and its runs."""
 
 import math
 
-from checking import tr, t
+from checking import only_if, t, tr
 import runs
 
 SCRIPT = "grpo_addition"
@@ -40,31 +40,34 @@ def cases():
 
 
 def mistakes(rewards, G, scale):
-    def adv(view=lambda r: r.view(-1, G), unbiased=True, eps=1e-4, whole=False):
+    def adv(view=lambda r: r.view(-1, G), unbiased=True, eps=1e-4, whole=False, floor=0.0):
         r = rewards.view(1, -1) if whole else view(rewards)
         a = r - r.mean(1, keepdim=True)
         if scale:
-            a = a / (r.std(1, keepdim=True, unbiased=unbiased) + eps)
-        return a.reshape(-1) if not whole else a.reshape(-1)
+            a = a / (r.std(1, keepdim=True, unbiased=unbiased).clamp_min(floor) + eps)
+        return a.reshape(-1)
+    flat = bool((rewards.view(-1, G).std(1) == 0).any())  # 0 / anything small is 0 there
     return [(tr("the std without Bessel's correction (n, not n - 1; torch's .std() is n - 1)",
                 "标准差没有用贝塞尔校正（除以 n，不是 n - 1；torch 的 .std() 除以 n - 1）"),
-             adv(unbiased=False)),
+             only_if(scale, adv(unbiased=False))),
             (tr("the mean and std over the whole batch, not each prompt's group",
                 "均值和标准差是对整个批量算的，不是对每道题的那一组"), adv(whole=True)),
             (tr("the groups read down the columns (view(G, -1)): a group is G consecutive rewards",
                 "分组分错了（view(G, -1)）：一组是连续的 G 个奖励"),
              (lambda r: (r - r.mean(0, keepdim=True)) / (
                  r.std(0, keepdim=True) + 1e-4 if scale else 1))(rewards.view(G, -1)).reshape(-1)),
-            (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"), adv(eps=0.0)),
+            (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"),
+             only_if(scale, adv(eps=0.0))),
             (tr("the 1e-4 as a floor (std.clamp_min(1e-4)) where it is added (std + 1e-4)",
                 "把 1e-4 当成了下限（std.clamp_min(1e-4)），应该是加上去（std + 1e-4）"),
-             adv(eps=0.0)),
+             only_if(scale and not flat, adv(eps=0.0, floor=1e-4))),
             (tr("1e-8 added where this project adds 1e-4 (std + 1e-4)",
-                "加的是 1e-8，本项目加的是 1e-4（std + 1e-4）"), adv(eps=0.0)),
+                "加的是 1e-8，本项目加的是 1e-4（std + 1e-4）"),
+             only_if(scale and not flat, adv(eps=1e-8))),
             (tr("scale ignored: divided by the std where scale = False asks for r - mean only",
                 "忽略了 scale：scale = False 时只减均值，不除以标准差"),
-             (lambda r: ((r - r.mean(1, keepdim=True)) / (r.std(1, keepdim=True) + 1e-4)))(
-                 rewards.view(-1, G)).reshape(-1))]
+             only_if(not scale, (lambda r: ((r - r.mean(1, keepdim=True)) / (
+                 r.std(1, keepdim=True) + 1e-4)))(rewards.view(-1, G)).reshape(-1)))]
 
 
 def group_eps_mistake(fn):

@@ -7,7 +7,7 @@ import math
 
 import torch
 
-from checking import tr, t, scalar
+from checking import only_if, scalar, t, tr
 import runs
 
 SCRIPT = "grpo_addition"
@@ -87,7 +87,8 @@ def mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
                 "π_ref / π - log(π_ref / π) - 1（永远不为负）"), grpo_by_hand(*args, cfg, k1=True)),
             (tr("one mean over all (B, L) entries, the padding's zeros counted: each completion "
                 "is averaged over its own tokens first", "对全部 (B, L) 个位置求了一个均值，把填充的 0 "
-                "也算进去了：应该先在每个回答自己的 token 上平均"), grpo_by_hand(*args, cfg, all_mean=True)),
+                "也算进去了：应该先在每个回答自己的 token 上平均"), only_if(
+                cfg.length_norm, grpo_by_hand(*args, cfg, all_mean=True))),
             (tr("length_norm ignored: each completion divided by its own length where "
                 "length_norm = False divides by the longest possible one (L, the same for all)",
                 "忽略了 length_norm：length_norm = False 时应该除以最长可能的长度 L（大家都一样），"

@@ -33,7 +33,7 @@ def cases():
     return [(tr(f"beta = {beta}: -mean(r A) + beta KL(pi_old || pi), KL = {kl:.4f}",
                 f"beta = {beta}：-mean(r A) + beta KL(pi_old || pi)，KL = {kl:.4f}"),
              (policy, data, beta), (scalar(-surrogate + beta * kl), None, None))
-            for beta in (0.0, 2.0)]
+            for beta in (0.5, 2.0)]
 
 
 def mistakes(policy, data, beta):
