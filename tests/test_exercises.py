@@ -1235,3 +1235,21 @@ def test_a_mistake_is_named_only_where_every_case_agrees():
     passed, lines = run("discounted_returns", compile_answer(TWO_SLIPS, "discounted_returns"))
     assert not passed and "no episode ends" in lines[-1], lines
     assert "this is exactly what this mistake" not in lines[-1], lines[-1]
+
+
+@pytest.mark.quick
+def test_a_slip_that_shares_one_number_with_a_mistake_gets_its_own_name_or_none():
+    """tau left off the source's term gives 1.0 after the first soft update, as a hard copy
+    does, and 1.9 after the second: named for what it is, not a hard copy. An argmax taken at
+    s gives DQN's y on this batch's non-terminal rows only where argmax Q(s) = argmax Q'(s'):
+    the case keeps them apart, and nothing is named."""
+    passed, lines = run("soft_update", compile_answer(SOFT.format("pt.mul_(1 - tau).add_(p)"),
+                                                      "soft_update"))
+    assert not passed and "tau left off the network's term" in lines[-1], lines
+    assert "a hard copy" not in lines[-1], lines[-1]
+    passed, lines = run("dqn_target", compile_answer(dqn_answer(
+        """next_max = q_next.max(-1).values
+            a_star = q_net(obs).argmax(-1, keepdim=True)  # at s, not s'
+            next_double = q_next.gather(-1, a_star).squeeze(-1)""")[0], "dqn_target"))
+    assert not passed and "Double DQN (cfg.double = True)" in lines[-1], lines
+    assert "this is exactly what this mistake" not in lines[-1], lines[-1]

@@ -45,8 +45,10 @@ def dqn_case(double):
         def step(self):
             pass
 
+    # argmax_a Q(s, a) (0, 0, 0) is not argmax_a Q(s', a) (1, 0, 1) nor argmax_a Q'(s', a)
+    # (0, 1, 1): an argmax taken at s is neither DQN's max nor Double DQN's pick
     #                    s: 0-2 (actions 0, 1, 0)     s': 3-5
-    q_net = Table([[1.5, 0.0], [0.0, 1.5], [1.5, 0.0], [0.25, 0.5], [1.25, 0.25], [0.0, 0.25]])
+    q_net = Table([[1.5, 0.0], [2.0, 1.5], [1.5, 0.0], [0.25, 0.5], [1.25, 0.25], [0.0, 0.25]])
     q_target = Table([[0.0, 0.0]] * 3 + [[0.75, 0.0], [0.5, 1.0], [0.25, 0.75]])
     obs, next_obs = t([0.0, 0.0], [1.0, 0.0], [2.0, 0.0]), t([3.0, 0.0], [4.0, 0.0], [5.0, 0.0])
     batch = (obs, torch.tensor([0, 1, 0]), t(1.0, 1.0, 1.0), next_obs, t(1.0, 1.0, 0.0))

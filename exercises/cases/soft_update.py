@@ -29,28 +29,41 @@ def worked_cases(fn):
             p.fill_(0.0)
             q.fill_(1.0)
     before = [id(p) for p in target.parameters()]
+    seen = []  # the target's numbers after each of the two updates
     for expected in (0.1, 0.19):
-        fn(target, source, 0.1)
-        got = [round(float(x), 6) for p in target.parameters() for x in p.detach().flatten()]
+        try:
+            fn(target, source, 0.1)
+        except Exception:  # noqa: BLE001  after a wrong first update, the first is told
+            if not seen or seen[0] == [0.1] * 3:
+                raise
+            break
+        seen.append([round(float(x), 6) for p in target.parameters()
+                     for x in p.detach().flatten()])
+    # what each mistake gives after the first and the second update: named only where both
+    # agree (a single number is shared: tau left off the source gives 1.0, as a hard copy does)
+    known = {(0.9, 0.99): tr("tau and 1 - tau swapped (the target jumps most of the way)",
+                             "tau 和 1 - tau 放反了（目标网络一下子移动了大部分距离）"),
+             (0.0, 0.0): tr("the target did not move: assign in place (p_target.mul_/add_ or "
+                            "copy_), and move the target, not the source\n    (p_target = ... "
+                            "only rebinds a name; the network keeps its old tensor)",
+                            "目标网络没有动：要原地赋值（p_target.mul_/add_ 或 copy_），并且动的是"
+                            "目标网络，不是当前网络\n    （p_target = ... 只是让这个名字指向新张量，"
+                            "网络里还是原来的那个）"),
+             (1.0, 1.0): tr("a hard copy: tau = 1 (the target becomes the network at once)",
+                            "硬拷贝：相当于 tau = 1（目标网络一下子变成了当前网络）"),
+             (0.09, 0.171): tr(
+                 "the two steps in the wrong order: add_(tau * theta) then mul_(1 - "
+                 "tau) scales theta too;\n    mul_(1 - tau) first, then add_(tau * "
+                 "theta)", "两步的顺序反了：先 add_(tau * theta) 再 mul_(1 - tau)，"
+                 "把 theta 也缩小了；\n    应该先 mul_(1 - tau)，再 add_(tau * theta)"),
+             (1.0, 1.9): tr("tau left off the network's term: theta' = (1 - tau) * theta' + "
+                            "theta, where it is tau * theta",
+                            "当前网络那一项漏了 tau：写成了 theta' = (1 - tau) * theta' + theta，"
+                            "应该是 tau * theta")}
+    for expected, got in zip((0.1, 0.19), seen):
         if got != [expected] * 3:
-            first = expected == 0.1  # what each mistake gives after the first update
-            known = {0.9 if first else 0.99: tr(
-                         "tau and 1 - tau swapped (the target jumps most of the way)",
-                         "tau 和 1 - tau 放反了（目标网络一下子移动了大部分距离）"),
-                     0.0: tr("the target did not move: assign in place (p_target.mul_/add_ or "
-                             "copy_), and move the target, not the source\n    (p_target = ... "
-                             "only rebinds a name; the network keeps its old tensor)",
-                             "目标网络没有动：要原地赋值（p_target.mul_/add_ 或 copy_），并且动的是"
-                             "目标网络，不是当前网络\n    （p_target = ... 只是让这个名字指向新张量，"
-                             "网络里还是原来的那个）"),
-                     1.0: tr("a hard copy: tau = 1 (the target becomes the network at once)",
-                             "硬拷贝：相当于 tau = 1（目标网络一下子变成了当前网络）"),
-                     0.09 if first else 0.171: tr(
-                         "the two steps in the wrong order: add_(tau * theta) then mul_(1 - "
-                         "tau) scales theta too;\n    mul_(1 - tau) first, then add_(tau * "
-                         "theta)", "两步的顺序反了：先 add_(tau * theta) 再 mul_(1 - tau)，"
-                         "把 theta 也缩小了；\n    应该先 mul_(1 - tau)，再 add_(tau * theta)")}
-            label = known.get(got[0]) if len(set(got)) == 1 else None
+            label = next((label for pair, label in known.items()
+                          if seen == [[v] * 3 for v in pair]), None)
             raise Failed(tr(
                 f"case: theta' = 0, theta = 1, tau = 0.1: two soft updates in a row, 0.1 after "
                 f"the first, 0.19 after the second\n  target's weights and bias after soft_update: "
