@@ -193,16 +193,20 @@ def latest_run(path, script, needs="model.pt"):
     """`path` with a part named `latest` (runs/latest, runs/latest/best.pt) read as the newest
     run folder of `script` in that folder, by the time in its name, that holds the file asked
     for (the rest of `path`, or else `needs`); a newer one without it (killed before it wrote
-    one, or still training) is passed over, with a line that says so. A path that exists as
-    it is stays as it is.
+    one, or still training) is passed over, with a line that says so. `latest` is read so
+    where it is a link too (runlog.point_latest: the newest run of any script, maybe still
+    training); a path without it, or with a real folder named `latest`, stays as it is.
 
     >>> latest_run("runs/my_script__some_env__seed0__20260101-120000", "my_script")
     'runs/my_script__some_env__seed0__20260101-120000'
     """
     parts = Path(path).parts
-    if "latest" not in parts or Path(path).exists():
+    if "latest" not in parts:
         return path
     at = parts.index("latest")
+    named = Path(*parts[:at + 1])
+    if named.is_dir() and not named.is_symlink():  # a folder of the reader's own named latest
+        return path
     parent, inside = Path(*parts[:at]) if at else Path("."), Path(*parts[at + 1:] or [needs])
     runs = sorted(parent.glob(f"{script}__*"), key=lambda run: run.name.split("__")[-1])
     if not runs:

@@ -4,6 +4,7 @@ From the command line, compare runs: a panel per env, a colour per script, each 
 line that ends where the run stopped, their mean (thick) where all of them ran.
 
     python plots.py runs/*                             # every run there -> compare.png
+    python plots.py runs/latest                        # the newest run (a link to its folder)
     python plots.py runs/<script>__* --out mine.png    # the runs of one script
     python plots.py --maps runs/*                      # the runs that keep maps -> maps.png
 
@@ -385,32 +386,50 @@ RECENT = "mean return of the recent training episodes (the solved rule's window)
 
 def curve_of(run_dir):
     """(steps, values, what the values are) of one run, points without a value dropped: the
-    evaluation means of a run that evaluates, or the recent_return after each update."""
+    evaluation means of a run that evaluates, or the recent_return after each update; a run
+    that logs neither (a language model's, whose checks come last): its last column of numbers
+    in progress.csv."""
     if (run_dir / "evaluations.csv").exists():
         table, column, what = read_csv(run_dir / "evaluations.csv"), "eval_mean", EVAL_RETURN
     else:
         table, what = read_csv(run_dir / "progress.csv"), RECENT
         column = "recent_return" if "recent_return" in table else "return_mean20"  # older runs
+        numbers = [c for c, v in table.items() if c != "global_step" and v.dtype.kind == "f"
+                   and np.isfinite(v).any()]
+        if column not in table and numbers:
+            column = numbers[-1]
+            what = f"{column} (no return logged: the last column of progress.csv)"
     steps, values = table.get("global_step", np.array([])), table.get(column, np.array([]))
     ok = np.isfinite(values)  # nan before the first finished episode
     return steps[ok], values[ok], what
+
+
+def distinct(run_dirs):
+    """`run_dirs` as paths, each folder once: a link (runs/latest) is read as the folder it
+    names, so that `plots.py runs/*` draws the newest run once, under its own name."""
+    found = {}  # the folder -> the path it is shown by (the one given, unless a link)
+    for path in map(Path, run_dirs):
+        if not path.is_symlink():
+            found[path.resolve()] = path
+        else:
+            found.setdefault(path.resolve(), path.resolve())
+    return list(found.values())
 
 
 def compare_figure(run_dirs):
     """The figure of compare(): a panel per env and measure; per script, each run a thin line
     that ends where the run stopped, and their mean (thick) where every one has a value."""
     panels = {}  # (env, what) -> {script: [(steps, values), ...]}
-    for run_dir in map(Path, run_dirs):
+    for run_dir in distinct(run_dirs):
         if not ((run_dir / "progress.csv").exists() or (run_dir / "evaluations.csv").exists()):
             print(f"note: {run_dir} is not a run folder (no progress.csv or evaluations.csv); "
                   "left out", file=sys.stderr)
             continue
         parts = run_dir.name.split("__")  # <script>__<env>__seed<k>__<time>
         steps, values, what = curve_of(run_dir)
-        if not len(steps):  # no episode ended yet, or a script that logs no return at all
-            print(f"note: {run_dir} holds no return to compare yet (recent_return or eval_mean;"
-                  " a run that logs other measures draws them in its own curve.png); left out",
-                  file=sys.stderr)
+        if not len(steps):  # no episode ended yet, or no row measured anything
+            print(f"note: {run_dir} holds nothing to compare yet (no recent_return, eval_mean "
+                  "or other measure with a value); left out", file=sys.stderr)
             continue
         env = parts[1] if len(parts) > 1 else "env unknown"
         panels.setdefault((env, what), {}).setdefault(parts[0], []).append((steps, values))
@@ -451,7 +470,7 @@ def compare_maps(run_dirs, out):
     """Write `out`: the trained maps of value and policy of runs that keep a maps.npz (an env
     helper's maps_row), a row each."""
     plt, found = pyplot(), []
-    for run_dir in map(Path, run_dirs):
+    for run_dir in distinct(run_dirs):
         if not (run_dir / "maps.npz").exists():  # e.g. --no-curves, or a run without maps
             print(f"note: {run_dir} has no maps.npz (a run whose env has maps writes one when "
                   "it finishes training with its pictures); left out", file=sys.stderr)

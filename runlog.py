@@ -5,6 +5,7 @@ diverged run. When to stop is decided in the scripts' loops, from what this keep
 
 import contextlib
 import csv
+import os
 import shutil
 import time
 from pathlib import Path
@@ -18,17 +19,48 @@ from common import UserError, written_whole
 
 
 def make_run_dir(root, script, env_id, seed):
-    """Create and return <root>/<script>__<env>__seed<k>__<timestamp>[-i]/."""
+    """Create and return <root>/<script>__<env>__seed<k>__<timestamp>[-i]/; <root>/latest
+    links to it (point_latest)."""
     name = f"{script}__{env_id.replace('/', '-')}__seed{seed}__"
     base = Path(root) / (name + time.strftime("%Y%m%d-%H%M%S"))
     for path in [base, *(Path(f"{base}-{i}") for i in range(1, 1000))]:
         try:
             path.mkdir(parents=True)
-            return path
         except FileExistsError:  # another run started this second: the next name
             continue
         except OSError as e:
             raise UserError(f"cannot create run folder {path}: {e.strerror}") from None
+        point_latest(root, path)
+        return path
+
+
+LATEST = "latest"  # <root>/latest: a link to the newest run folder there, of any script
+
+
+def point_latest(root, run=None):
+    """Make <root>/latest a link to the run folder `run` (None: the newest left in `root`, by
+    the time in its name; none left: no link). The link is made aside and renamed over the old
+    one, so a reader never finds it half made. Where links cannot be made (Windows without the
+    privilege, a filesystem without them), one line says so: --eval and --resume still read
+    runs/latest as the script's newest run (cli.latest_run)."""
+    link = Path(root) / LATEST
+    if run is None:
+        runs = sorted((p for p in Path(root).glob("*__*") if p.is_dir() and not p.is_symlink()),
+                      key=lambda p: p.name.split("__")[-1])
+        if not runs:
+            if link.is_symlink():
+                link.unlink()
+            return
+        run = runs[-1]
+    tmp = Path(root) / f".{LATEST}.{os.getpid()}.tmp"
+    try:
+        tmp.unlink(missing_ok=True)
+        tmp.symlink_to(Path(run).name, target_is_directory=True)  # relative: moves with root
+        os.replace(tmp, link)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        print(f"note: {link} cannot be made a link to this run ({e.strerror or e}); --eval and "
+              f"--resume still take {link} as the script's newest run", flush=True)
 
 
 def append_csv(path, row):
@@ -64,6 +96,9 @@ def stop_if_diverged(step, losses, nets, run_dir=None, outputs=()):
         removed = run_dir is not None and not (Path(run_dir) / "checkpoint.pt").exists()
         if removed:
             shutil.rmtree(run_dir, ignore_errors=True)
+            latest = Path(run_dir).parent / LATEST
+            if latest.is_symlink() and not latest.exists():  # it named the removed folder
+                point_latest(Path(run_dir).parent)
         raise UserError(f"training diverged at step {step}: nan or inf in {', '.join(bad)}; "
                         "likely cause: too high a learning rate (try a smaller one)"
                         + (f"; {run_dir} was removed" if removed else ""))

@@ -16,6 +16,12 @@ def run_script(script, *args, timeout=300, cwd=None, env=None):
                           preexec_fn=ctrl_c_default)
 
 
+def run_folders(root):
+    """The run folders in `root`, sorted: its entries but the runs/latest link
+    (runlog.point_latest)."""
+    return sorted(p for p in Path(root).iterdir() if not p.is_symlink())
+
+
 # The bad inputs whose tests run the real command, each in a new process: the allocation that
 # fails, and an env that gymnasium cannot make (where a package's warning would show).
 IN_A_PROCESS = ("not enough memory", "unknown environment")

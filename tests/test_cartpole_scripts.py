@@ -12,7 +12,7 @@ import torch
 import checkpoints
 import report
 
-from conftest import IN_A_PROCESS, ROOT, ctrl_c_default, interrupt, run_main, run_script
+from conftest import IN_A_PROCESS, ROOT, ctrl_c_default, interrupt, run_folders, run_main, run_script
 
 SCRIPTS = [name for name in ("ppo_cartpole", "ppo_kl_cartpole", "actor_critic_cartpole")
            if (ROOT / f"{name}.py").exists()]
@@ -199,7 +199,7 @@ def test_ctrl_c_while_gifs_are_written(script, tmp_path, sent):
                                after="greedy evaluation", signal=how)
     assert code == exit_code, (out, err)
     assert err.strip() == "", err
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     last = out.strip().splitlines()[-1]
     assert last.startswith("interrupted") and str(run) in last and "model.pt" in last, out
     assert torch.load(run / "model.pt", weights_only=True)["global_step"] > 0

@@ -19,7 +19,7 @@ import report
 import runlog
 import mujoco_env
 from common import UserError
-from conftest import IN_A_PROCESS, ROOT, interrupt, run_main, run_script
+from conftest import IN_A_PROCESS, ROOT, interrupt, run_folders, run_main, run_script
 
 
 def play(path, episodes, script=ddpg):
@@ -396,7 +396,7 @@ def test_resume_after_a_kill_rolls_back_to_the_checkpoint_and_is_the_unbroken_ru
     proc.kill()  # SIGKILL: no handler runs, nothing is saved
     proc.wait()
     assert any(line.startswith("checkpoint at step 800") for line in seen), seen
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     steps = [int(r["global_step"]) for r in csv.DictReader(open(run / "evaluations.csv"))]
     assert steps[-1] >= 1200  # rows after the checkpoint were written before the kill
     (run / "checkpoint.pt.tmp").write_bytes(b"half a checkpoint")  # as a kill mid-write leaves it
@@ -411,7 +411,7 @@ def test_ctrl_c_saves_a_checkpoint_at_the_step_it_stopped_and_resume_is_the_unbr
                                after="step     1100")
     assert code == 130, err
     assert err.strip() == "", err  # the one line saying where everything is goes to stdout
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
     assert 1100 <= stopped < 2400 and stopped % 800  # where Ctrl-C came, not a periodic checkpoint
     assert f"interrupted at step {stopped}" in out and f"--resume {run}" in out
@@ -488,7 +488,7 @@ def test_resume_after_a_kill_puts_back_the_pictures_and_best_files_of_its_checkp
             break
     proc.kill()  # SIGKILL: no handler runs, nothing is saved
     proc.wait()
-    (run,) = (tmp_path / "runs").iterdir()
+    (run,) = run_folders(tmp_path / "runs")
     saved = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
     future = torch.load(run / "best.pt", weights_only=True)["global_step"]
     assert saved == 1600 and future > saved  # what this test is about: a best past it
@@ -622,7 +622,7 @@ def test_steps_per_second_leave_out_the_evaluations_and_resume_keeps_the_clock(
              if line.startswith("step") and "steps/s" in line]
     rates = [float(words[2]) for words in lines]
     assert len(rates) >= 8 and max(rates) - min(rates) <= 0.1 * max(rates), rates
-    run = next(tmp_path.iterdir())
+    run = run_folders(tmp_path)[0]
     ckpt = torch.load(run / "checkpoint.pt", weights_only=True)
     assert ckpt["log"]["elapsed"] > 2000  # two evaluations of 1000 s on the run's clock
     ddpg.train(ddpg.Config(resume=str(run), total_timesteps=1300))

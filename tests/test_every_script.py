@@ -20,7 +20,8 @@ import imageio.v3 as iio
 import pytest
 
 import fingerprints
-from conftest import interrupt, run_main, run_script
+import plots
+from conftest import interrupt, run_folders, run_main, run_script
 from fingerprints import LOGS, SCRIPTS, quick_smoke, smoke
 
 
@@ -105,6 +106,11 @@ def test_smoke_run_writes_its_files_draws_and_replays(script, tmp_path, capsys):
     assert not any(".tmp" in name for name in names), names
     for picture in ("curve.png", "inside.png"):
         assert picture in names and not_blank(run / picture), picture
+    assert (tmp_path / "latest").resolve() == run.resolve()  # runs/latest: a folder to open
+    # plots.py takes any finished run, and runs/latest is that run again, not a second one
+    fig = plots.compare_figure([run, tmp_path / "latest"])
+    legends = [[t.get_text() for t in ax.get_legend().get_texts()] for ax in fig.axes]
+    assert legends == [[f"{script.__name__}: 1 run"]], legends
     capsys.readouterr()
     episodes = [] if "eval_episodes" in getattr(script.Config, "UNUSED_FLAGS", ()) else [
         "--eval-episodes", "1"]  # a script with no env refuses the flag
@@ -127,7 +133,7 @@ def test_same_seed_same_logs(script, tmp_path):
                    tmp_path / "0", env={"PYTHONHASHSEED": "12345"})
     assert p.returncode == 0, p.stderr
     gifs = {"gifs": True} if "gifs" in quiet else {}  # the other seed's run writes its GIFs
-    runs = [next((tmp_path / "0").iterdir())] + [
+    runs = [run_folders(tmp_path / "0")[0]] + [
         script.train(smoke(script, tmp_path / str(i), seed=seed + (i == 2),
                            **{**quiet, **(gifs if i == 2 else {})}))["run_dir"]
         for i in (1, 2)]
@@ -157,7 +163,7 @@ def test_ctrl_c_or_sigterm_is_one_line_and_keeps_its_files(script, how, code, tm
     assert got == code, (out, err)
     assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
     assert "interrupted" in out + err, (out, err)
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     names = {p.name for p in run.iterdir()}
     assert "model.pt" in names and not any(".tmp" in n for n in names), names
     if "resume" in {f.name for f in dataclasses.fields(script.Config)}:  # its checkpoint, of

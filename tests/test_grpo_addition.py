@@ -8,7 +8,7 @@ import pytest
 import torch
 
 import grpo_addition as grpo
-from conftest import run_main
+from conftest import run_folders, run_main
 
 
 @pytest.mark.quick
@@ -248,7 +248,7 @@ def test_a_supervised_phase_that_ends_mid_rise_is_noted(checks, noted, monkeypat
 def test_a_short_run_writes_its_files_and_its_reward_rises(tmp_path, capsys):
     p = run_main("grpo_addition.py", *SMALL, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 0, p.stderr
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     assert {f.name for f in run.iterdir()} >= {"progress.csv", "model.pt", "curve.png", "inside.png"}
     rows = [r for r in csv.DictReader(open(run / "progress.csv")) if r["reward"] != "nan"]
     assert len(rows) == 40
@@ -296,7 +296,7 @@ def test_ctrl_c_keeps_the_model(tmp_path):
     code, out, err = interrupt("grpo_addition.py", *SMALL, "--grpo-steps", 100000,
                                "--print-every", 1, "--run-dir", tmp_path, after="step     30")
     assert code == 130, err
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     assert {f.name for f in run.iterdir()} >= {"model.pt", "progress.csv", "curve.png",
                                                  "inside.png"}
     assert not list(run.glob("*.tmp"))

@@ -401,15 +401,37 @@ def test_the_maps_are_titled_with_what_the_script_says_they_show():
             f"{policy}, untrained", f"{policy}, trained"]
 
 
-def test_a_run_that_logs_no_return_is_left_out_with_a_line_that_says_why(tmp_path, capsys):
-    """A finished run whose log holds other measures (a language model's accuracy, two tabular
-    agents' returns under their own names) is no 'nothing to draw yet': it says what it lacks."""
+def test_a_run_that_logs_no_return_is_drawn_by_its_last_column(tmp_path, capsys):
+    """A finished run whose log holds other measures (a language model's held-out checks, which
+    its script logs last) is drawn by its last column of numbers, named on the axis; a run with
+    nothing measured yet is left out with a line that says so."""
     import plots
 
     run = tmp_path / "some_script__task__seed0__20260101-000000"
     run.mkdir()
-    (run / "progress.csv").write_text("global_step,loss,pass1\n10,2.4,0.1\n20,2.1,0.3\n")
+    (run / "progress.csv").write_text("global_step,phase,loss,pass1\n10,sft,2.4,\n"
+                                      "20,sft,2.1,0.3\n30,rl,1.9,0.5\n")
+    (ax,) = plots.compare_figure([run]).axes
+    assert ax.get_title() == "task" and "pass1" in ax.get_ylabel()
+    np.testing.assert_array_equal(ax.lines[0].get_xydata(), [[20, 0.3], [30, 0.5]])
+    (run / "progress.csv").write_text("global_step,phase\n10,sft\n")
     with pytest.raises(SystemExit):
         plots.compare_figure([run])
-    err = capsys.readouterr().err
-    assert "holds no return to compare" in err and "its own curve.png" in err, err
+    assert "holds nothing to compare yet" in capsys.readouterr().err
+
+
+def test_plots_takes_runs_latest_as_the_run_it_names(tmp_path, capsys):
+    """`python plots.py runs/latest` draws the newest run under its own script's name, and
+    `python plots.py runs/*` draws it once, not again as a run of a script named latest."""
+    import plots
+    import runlog
+
+    for seed in (0, 1):
+        run = runlog.make_run_dir(tmp_path, "ddpg_walker", "Walker2d-v5", seed)
+        (run / "evaluations.csv").write_text("global_step,eval_mean,eval_std\n5000,1,0\n"
+                                             "10000,2,0\n")
+    for runs, label in (([tmp_path / "latest"], "ddpg_walker: 1 run"),
+                        (sorted(tmp_path.iterdir()), "ddpg_walker: 2 runs (thin), their mean "
+                                                     "while all ran")):
+        (ax,) = plots.compare_figure(runs).axes
+        assert [t.get_text() for t in ax.get_legend().get_texts()] == [label]

@@ -10,7 +10,7 @@ import pytest
 import torch
 
 import rlhf_addition as rlhf
-from conftest import run_main
+from conftest import run_folders, run_main
 
 
 @pytest.mark.quick
@@ -164,7 +164,7 @@ def test_a_short_run_raises_the_true_score(tmp_path, capsys):
     --eval."""
     p = run_main("rlhf_addition.py", *SHORT, "--run-dir", tmp_path, capsys=capsys)
     assert p.returncode == 0, p.stderr
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     assert {f.name for f in run.iterdir()} >= {"progress.csv", "model.pt", "curve.png",
                                               "inside.png"}
     rows = [r for r in csv.DictReader(open(run / "progress.csv")) if r["phase"] == "ppo"]
@@ -197,7 +197,7 @@ def test_ctrl_c_keeps_the_model(tmp_path):
     code, out, err = interrupt("rlhf_addition.py", *args, "--sft-steps", 100000,
                                "--print-every", 1, "--run-dir", tmp_path, after="step     20")
     assert code == 130, err
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     assert (run / "model.pt").exists() and not list(run.glob("*.tmp*"))
     last = out.strip().splitlines()[-1]  # the same last line as every script's
     assert last.startswith("interrupted at step") and "its model.pt, as training left it" in last

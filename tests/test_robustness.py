@@ -51,7 +51,8 @@ def hooked(tmp_path, code):
 
 
 def run_folders(path):
-    return [p for p in path.iterdir() if p.name != "hook"]
+    """The run folders in `path`: not the hook's folder, nor the runs/latest link."""
+    return [p for p in path.iterdir() if p.name != "hook" and not p.is_symlink()]
 
 
 def one_line(stderr, needle):
@@ -159,7 +160,7 @@ def test_interrupted_run_draws_its_curve_and_says_where_it_is(script, tmp_path):
                                "--total-timesteps", 10_000_000, "--print-every", 1, after="step")
     assert code == 130, err
     assert "Traceback" not in err
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     assert (run / "curve.png").stat().st_size > 0 and not list(run.glob("*.tmp*"))
     last = out.strip().splitlines()[-1]
     assert last.startswith("interrupted at step") and str(run) in last, out
@@ -241,7 +242,7 @@ def test_cuda_without_a_gpu_says_so_and_trains_on_the_cpu(script, tmp_path):
     assert p.returncode == 0, p.stderr
     assert one_line(p.stderr, "warning: --cuda, but torch sees no GPU"), p.stderr
     assert "running on the CPU" in p.stderr
-    (run,) = tmp_path.iterdir()
+    (run,) = run_folders(tmp_path)
     with open(run / "progress.csv") as f:
         assert len(list(csv.DictReader(f))) >= 1  # it trained
 
@@ -323,7 +324,7 @@ def test_a_read_only_run_dir_is_one_line_and_a_missing_one_is_made(script, tmp_p
     p = run_main(f"{script}.py", "--run-dir", tmp_path / "new" / "runs", "--no-gifs",
                  "--no-curves", *small, capsys=capsys)
     assert p.returncode == 0, p.stderr
-    assert len(list((tmp_path / "new" / "runs").iterdir())) == 1
+    assert len(run_folders(tmp_path / "new" / "runs")) == 1
 
 
 def test_resume_of_a_read_only_run_is_one_line_and_eval_of_it_writes_nothing(tmp_path,
@@ -333,7 +334,7 @@ def test_resume_of_a_read_only_run_is_one_line_and_eval_of_it_writes_nothing(tmp
     its --gif elsewhere."""
     assert run_main("ddpg_walker.py", "--run-dir", tmp_path / "runs", *WALKER,
                     capsys=capsys).returncode == 0
-    (run,) = (tmp_path / "runs").iterdir()
+    (run,) = run_folders(tmp_path / "runs")
     read_only(tmp_path / "runs")
     before = {p.name: p.read_bytes() for p in run.iterdir()}
     p = run_main("ddpg_walker.py", "--resume", run, "--total-timesteps", 600, capsys=capsys)

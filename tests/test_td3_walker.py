@@ -9,7 +9,7 @@ import pytest
 import torch
 
 import td3_walker as td3
-from conftest import ROOT, interrupt, run_main
+from conftest import ROOT, interrupt, run_folders, run_main
 from test_ddpg_walker import PENDULUM, pendulum_flags, play
 
 
@@ -76,7 +76,7 @@ def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
     code, out, err = interrupt("td3_walker.py", *pendulum_flags(**short), "--run-dir",
                                tmp_path / "cut", after="step     1100")
     assert code == 130, err
-    (run,) = (tmp_path / "cut").iterdir()
+    (run,) = run_folders(tmp_path / "cut")
     stopped = torch.load(run / "checkpoint.pt", weights_only=True)["global_step"]
     assert 1100 <= stopped < 1600 and f"--resume {run}" in out
     assert out.splitlines()[-1].startswith(f"interrupted at step {stopped};")  # one last line,

@@ -5,10 +5,12 @@ Ctrl-C and SIGTERM, the divergence check and the run's episode bookkeeping."""
 import copy
 import csv
 import dataclasses
+import errno
 import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -522,6 +524,50 @@ def test_runs_latest_is_the_newest_run_of_this_script(tmp_path, capsys):
             (run / file).unlink(missing_ok=True)
     with pytest.raises(UserError, match="has model.pt yet"):
         cli.latest_run(str(tmp_path / "latest"), "ddpg_walker")
+
+
+def test_runs_latest_is_a_link_to_the_newest_run_folder(tmp_path, capsys):
+    """runs/latest is a folder a reader can open: a link (relative, so runs/ can move) to the
+    newest run folder of any script, made as each run folder is. --eval and --resume still
+    read it as their own script's newest run, not another script's. A diverged run's removal
+    points it back at the newest run left, or removes it when none is left."""
+    root = tmp_path / "runs"
+    older = runlog.make_run_dir(root, "script_a", "Env-v1", 0)
+    assert (root / "latest").is_symlink() and (root / "latest").resolve() == older.resolve()
+    newer = runlog.make_run_dir(root, "script_b", "Env/v2", 1)
+    assert os.readlink(root / "latest") == newer.name
+    assert sorted(p.name for p in root.iterdir()) == sorted([older.name, newer.name, "latest"])
+    for run in (older, newer):
+        (run / "model.pt").touch()
+    assert cli.latest_run(str(root / "latest"), "script_a") == str(older)
+    assert cli.latest_run(str(root / "latest" / "model.pt"), "script_a") == str(
+        older / "model.pt")
+    for diverged, left in ((newer, older), (older, None)):
+        with pytest.raises(UserError, match="was removed"):
+            runlog.stop_if_diverged(7, dict(loss=float("nan")), (), diverged)
+        assert (root / "latest").resolve() == left.resolve() if left else not any(
+            root.iterdir())
+    assert capsys.readouterr().out == ""
+
+
+def test_runs_latest_where_links_cannot_be_made(tmp_path, capsys, monkeypatch):
+    """Windows without the privilege, a filesystem without links: one line says so, nothing
+    half made is left, and --eval runs/latest still finds the script's newest run."""
+    def refused(*args, **kwargs):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(Path, "symlink_to", refused)
+    run = runlog.make_run_dir(tmp_path, "script_a", "Env-v1", 0)
+    out = capsys.readouterr().out
+    assert out.count("\n") == 1 and "cannot be made a link" in out, out
+    assert list(tmp_path.iterdir()) == [run]
+    (run / "model.pt").touch()
+    assert cli.latest_run(str(tmp_path / "latest"), "script_a") == str(run)
+
+
+def test_a_folder_of_ones_own_named_latest_stays_as_it_is(tmp_path):
+    (tmp_path / "latest").mkdir()
+    assert cli.latest_run(str(tmp_path / "latest"), "script_a") == str(tmp_path / "latest")
 
 
 def test_eval_runs_latest_from_the_command_line(tmp_path):
