@@ -129,12 +129,15 @@ class CheckpointFlags(OutputFlags):
 def parse_config(cls, argv=None, description=None):
     """The @dataclass `cls` from flags. The script's own fields come first in --help, the
     shared ones after. Bad input: one line, exit 2 (abbreviations are refused). --help-zh (or
-    --help in a Chinese locale) adds a Chinese line under each flag, from locale/flags.zh-CN.md."""
-    argv, zh = help_zh.wanted(sys.argv[1:] if argv is None else argv)
+    --help in a Chinese locale) adds a Chinese line under each flag, from locale/flags.zh-CN.md;
+    --lang zh (or a Chinese locale; --lang en: English) prints the output in Chinese."""
+    argv, zh, chinese = help_zh.wanted(sys.argv[1:] if argv is None else argv)
+    if chinese:  # --lang zh, or a Chinese locale: each line printed from here on in Chinese
+        help_zh.print_in_chinese()
     module = sys.modules[cls.__module__]  # the script (its FLAGS_ZH, if it has them)
     zh_docs = help_zh.flags(Path(inspect.getfile(cls)).stem, module) if zh else {}
     parser = argparse.ArgumentParser(description=help_zh.overview(cls, description) if zh else
-                                     description, allow_abbrev=False, epilog=help_zh.HINT,
+                                     description, allow_abbrev=False, epilog=help_zh.EPILOG,
                                      formatter_class=help_zh.HelpFormatterZh if zh
                                      else help_zh.HelpFormatter)
     parser.error = lambda message: parser.exit(2, f"{parser.prog}: error: {message}\n")  # no usage

@@ -1,6 +1,9 @@
-"""--help in Chinese: `--help-zh` (or --help in a Chinese locale) puts a Chinese line under
-each flag's English help, read from locale/flags.zh-CN.md, and the script's 中文导读 under its
-English description. cli.parse_config asks it; nothing here knows a script."""
+"""Chinese for the reader. --help in Chinese: `--help-zh` (or --help in a Chinese locale) puts
+a Chinese line under each flag's English help, read from locale/flags.zh-CN.md, and the
+script's 中文导读 under its English description. The output in Chinese: `--lang zh` (or a
+Chinese locale) prints each line the code prints in English in its Chinese from
+locale/output.zh-CN.md, so the code keeps its English sentences. cli.parse_config asks it;
+nothing here knows a script."""
 
 import argparse
 import ast
@@ -14,14 +17,28 @@ import textwrap
 from pathlib import Path
 
 HELP_ZH = Path(__file__).resolve().parent / "locale" / "flags.zh-CN.md"
+OUTPUT_ZH = HELP_ZH.with_name("output.zh-CN.md")
 HINT = "--help-zh: a Chinese line under each flag (每个参数下面加一行中文说明)"  # --help ends so
+LANG_HINT = "--lang zh|en: the output's language (default: the locale's, as for --help)"
+EPILOG = f"{LANG_HINT}\n\n{HINT}"  # what --help ends with
 
 
 def wanted(argv):
-    """(argv with --help-zh read as --help, whether to add the Chinese lines)."""
-    argv = list(argv)
+    """(argv with --help-zh read as --help and --lang taken out, whether to add the Chinese
+    lines, whether the output is in Chinese: --lang zh|en, else the locale)."""
+    argv, lang = list(argv), None
+    for i, arg in enumerate(argv):
+        if arg.startswith("--lang="):
+            argv[i:i + 1], lang = [], arg.split("=", 1)[1]
+        elif arg == "--lang" and i + 1 < len(argv):
+            argv[i:i + 2], lang = [], argv[i + 1]
+        if lang is not None:
+            break
+    if lang not in (None, "zh", "en"):
+        argv.append(f"--lang={lang}")  # refused by argparse, as an unknown flag is
     zh = "--help-zh" in argv or bool({"-h", "--help"} & set(argv) and chinese_locale())
-    return ["--help" if arg == "--help-zh" else arg for arg in argv], zh
+    chinese = lang == "zh" or lang is None and chinese_locale()
+    return ["--help" if arg == "--help-zh" else arg for arg in argv], zh, chinese
 
 
 def chinese_locale():
@@ -164,3 +181,75 @@ def _wrap_wide(text, width):
         else:
             line.append(token)
     return lines + ["".join(line).rstrip()] if line else lines
+
+
+# ---- the output in Chinese ---------------------------------------------------------------
+
+def catalogue(path=OUTPUT_ZH):
+    """[(the English line as a pattern, its Chinese)] from `path`'s pairs of lines `en: ...`,
+    `zh: ...`; {name} in the English stands for any text, put where the Chinese has {name}.
+    The longest English first: a line matches the most specific entry."""
+    pairs, english = [], None
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("en: "):
+            english = line[4:]
+        elif line.startswith("zh: ") and english is not None:
+            pairs.append((pattern(english), line[4:]))
+            english = None
+    return sorted(pairs, key=lambda pair: -len(pair[0].pattern))
+
+
+def pattern(english):
+    """'run folder: {dir}' -> a regex that matches the line the code prints, {dir} any text
+    that is not blank (its padding kept: 'step {step}' matches 'step     2048')."""
+    regex, seen = "", set()
+    for text, name in re.findall(r"([^{]*)(?:\{(\w+)\}|$)", english):
+        regex += re.escape(text)
+        if name:
+            regex += f"(?P={name})" if name in seen else f"(?P<{name}>\\s*\\S.*?)"  # not blank
+            seen.add(name)
+    return re.compile(regex)
+
+
+def translate(line, entries):
+    """`line` in Chinese, where an entry of `entries` (catalogue()) matches the whole of it;
+    each field, where it is itself an entry's line, in Chinese too; else `line` as it is."""
+    for english, chinese in entries:
+        found = english.fullmatch(line)
+        if found:
+            for name, value in found.groupdict().items():
+                chinese = chinese.replace("{" + name + "}", translate(value, entries))
+            return chinese
+    return line
+
+
+class Translated:
+    """A text stream (sys.stdout, sys.stderr) that writes each whole line translated."""
+
+    def __init__(self, stream, entries):
+        self.stream, self.entries, self.pending = stream, entries, ""
+
+    def write(self, text):
+        *lines, self.pending = (self.pending + text).split("\n")
+        for line in lines:
+            self.stream.write(translate(line, self.entries) + "\n")
+        return len(text)
+
+    def flush(self):
+        if self.pending:  # a line written without its end, e.g. print(..., end="")
+            self.stream.write(translate(self.pending, self.entries))
+            self.pending = ""
+        self.stream.flush()
+
+    def __getattr__(self, name):  # encoding, isatty, fileno: the stream's
+        return getattr(self.stream, name)
+
+
+def print_in_chinese():
+    """From now on sys.stdout and sys.stderr print each line in Chinese where the catalogue
+    has it (once: a second call changes nothing)."""
+    entries = catalogue()
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if not isinstance(stream, Translated):
+            setattr(sys, name, Translated(stream, entries))

@@ -37,7 +37,7 @@ def run_main(script, *args, capsys):
     import types
 
     module = importlib.import_module(Path(script).stem)
-    environ, argv0 = dict(os.environ), sys.argv[0]
+    environ, argv0, streams = dict(os.environ), sys.argv[0], (sys.stdout, sys.stderr)
     for name in ("DISPLAY", "WAYLAND_DISPLAY"):
         os.environ.pop(name, None)
     sys.argv[0], code = script, 0  # argparse's prog, as on the command line
@@ -49,6 +49,7 @@ def run_main(script, *args, capsys):
         os.environ.clear()
         os.environ.update(environ)
         sys.argv[0] = argv0
+        sys.stdout, sys.stderr = streams  # --lang zh puts a translating stream in their place
     out, err = capsys.readouterr()
     return types.SimpleNamespace(returncode=code, stdout=out, stderr=err)
 

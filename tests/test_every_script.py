@@ -177,3 +177,42 @@ def test_ctrl_c_or_sigterm_is_one_line_and_keeps_its_files(script, how, code, tm
     promised = "before.gif and after.gif come when a run finishes"  # the walkers' line
     named = re.findall(r"\w+\.(?:gif|png|pt|csv)\b", last.replace(promised, ""))
     assert set(named) <= names, (named, names)  # it names no file that is not there
+
+
+def english_sentences(text, names=()):
+    """The runs of three or more English words in `text`, once names, numbers, paths and flags
+    are taken out: `names`, file and folder paths, --flags, identifiers (loss_pi, pass@1,
+    CartPole-v1), words in backquotes or in capitals (PPO, DPO)."""
+    found = []
+    for line in text.splitlines():
+        line = re.sub(r"`[^`]*`|\S*[/\\]\S*|\S+\.(?:py|pt|png|csv|gif|npz|md)\b|--[\w-]+", " ",
+                      line)
+        line = re.sub(r"\b(?:%s)\b" % "|".join(map(re.escape, names)) if names else "$^", " ",
+                      line)
+        line = re.sub(r"[\w@*'-]*[_\d@][\w@*'-]*|\b[A-Z][A-Z-]+\b", " ", line)
+        found += re.findall(r"[A-Za-z]{2,}(?:[ ,;:()]+[A-Za-z]{2,}){2,}", line)
+    return found
+
+
+def test_smoke_run_in_chinese_prints_no_english_sentence(script, tmp_path, capsys):
+    """--lang zh: every line of the smoke run (its progress lines, stages, last lines), of
+    --eval, of a one-line error and of a Ctrl-C is in Chinese, but for names, numbers, paths
+    and flags; without it the English is what it always was (the other tests)."""
+    names = [*getattr(script, "LOGGED", {}), "sft", "rm", "ppo", "dpo", "grpo", "Sarsa", "nan",
+             "cpu", "n/a", "pi", "argmax_a"]
+    flags = as_flags({**script.SMOKE, "print_every": 1})
+    p = run_script(f"{script.__name__}.py", *flags, "--run-dir", tmp_path / "runs", "--lang",
+                   "zh")
+    assert p.returncode == 0, p.stderr
+    assert "运行目录" in p.stdout and not english_sentences(p.stdout + p.stderr, names), (
+        english_sentences(p.stdout + p.stderr, names))
+    episodes = [] if "eval_episodes" in getattr(script.Config, "UNUSED_FLAGS", ()) else [
+        "--eval-episodes", "1"]
+    for args in (["--eval", tmp_path / "runs" / "latest", *episodes], ["--print-every", "0"]):
+        p = run_main(f"{script.__name__}.py", *args, "--lang", "zh", capsys=capsys)
+        assert not english_sentences(p.stdout + p.stderr, names), (p.stdout, p.stderr)
+    assert p.returncode == 2 and "必须是正数" in p.stderr, p.stderr
+    got, out, err = interrupt(f"{script.__name__}.py", *flags, "--run-dir", tmp_path / "cut",
+                              "--lang", "zh", after="第")
+    assert got == 130 and "中断" in out + err, (out, err)
+    assert not english_sentences(out + err, names), english_sentences(out + err, names)

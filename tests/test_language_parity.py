@@ -121,7 +121,8 @@ def chinese_texts():
     readme = read(ZH_README)  # less its glossary, which names the words it replaces
     texts = {ZH_README.name: readme.replace(glossary(), "")}
     texts.update({f"docs/{p.name}": read(p) for p in DOCS.glob("*.zh-CN.md")})
-    texts[str(help_zh.HELP_ZH.relative_to(ROOT))] = read(help_zh.HELP_ZH)
+    for locale in (help_zh.HELP_ZH, help_zh.OUTPUT_ZH):  # --help-zh's lines, --lang zh's
+        texts[str(locale.relative_to(ROOT))] = read(locale)
     for path in [*ROOT.glob("*.py"), *ROOT.glob("exercises/*.py"), *ROOT.glob("experiments/*.py")]:
         lines = [l for l in read(path).splitlines() if re.search(r"[\u4e00-\u9fff]", l)]
         if lines:
