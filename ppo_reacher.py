@@ -1,11 +1,12 @@
 """PPO-clip with a Gaussian policy on MuJoCo Reacher-v5 (Schulman et al. 2017), a two-joint arm
-that reaches for a target: the task of tutorial 002's series, with tutorial 002's update.
+that reaches for a target, the kind of task tutorial 002's series is about, with 002's update.
 
 Read beside tutorial 002 (compute_loss_pi, compute_loss_v, update(), early stop at 1.5 x
 target_kl) and after ppo_cartpole.py, whose loop this one keeps. What changes with continuous
 actions: pi(a|s) is a Gaussian N(mu(s), sigma^2) (PolicyNetwork), log pi(a|s) is summed over
 the action's dimensions (gaussian_log_prob), and the env gets the sample clipped to its box.
-The loop in train(), top to bottom:
+002's buffer: buf.store -> RolloutBuffer.store; finish_path(last_val) -> common.gae (the
+bootstrap rule above common.discounted_returns); buf.get -> batch_of. The loop in train():
 
     collect  num_steps x num_envs transitions, a ~ N(mu(s), sigma^2)
     GAE      advantages A_t and value targets R_t = A_t + V(s_t)   (common.gae)
@@ -18,11 +19,17 @@ The loop in train(), top to bottom:
     python ppo_reacher.py                       # 1M steps: about 10 minutes on a CPU
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
-中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，正是教程 002
-所在专栏（“实现机械臂reach某点之PPO算法实现”）的任务。策略是高斯分布 N(mu(s), sigma^2)，
-对数概率在动作的各维上求和；更新照教程 002 的 update()：整批数据上最多 train_pi_iters 步策略
-更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 步价值更新。--update
-minibatch 换成 ppo_cartpole.py 的小批量多轮更新。
+Where this differs from tutorial 002 (docs/why.md): observations are normalised (--norm-obs,
+on; 002 has none); the init is the PPO reference code's (orthogonal); the env gets the action
+clipped to its box (002 passes the sample, and Reacher charges its control cost on it);
+Reacher's time limit bootstraps V (gymnasium says `truncated`; 002's old gym said done).
+
+中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，和教程 002
+所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，
+对数概率在动作的各维上求和；更新按照教程 002 的 update()：在整批数据上最多做 train_pi_iters 次
+策略的梯度更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络的梯度更新。
+--update minibatch 换成 ppo_cartpole.py 的小批量多轮更新。教程 002 的 buf.store、finish_path、
+buf.get 分别对应 RolloutBuffer.store、common.gae、batch_of。
 """
 
 import copy
@@ -177,11 +184,12 @@ class Config(cli.CheckpointFlags):
     """log sigma at the start: sigma = 0.61 (Spinning Up: -0.5)"""
     # --- normalisation (named options) ---
     norm_obs: bool = True
-    """feed the networks (obs - mean) / std, clipped to +-10, with the running statistics of
-    every obs before this rollout (the PPO paper's baselines code); saved in model.pt"""
+    """feed the networks (obs - mean) / std, clipped to +-10 (the PPO paper's baselines code),
+    with the statistics of every obs before this rollout: held still within a rollout (ours;
+    baselines and CleanRL update them at every step); saved in model.pt"""
     norm_reward: bool = False
-    """divide rewards by the running std of the discounted return (gymnasium's NormalizeReward;
-    CleanRL on Walker2d); saved in checkpoint.pt"""
+    """divide rewards by the running std of the discounted return, reset at every episode's
+    end (after gymnasium's NormalizeReward; no clip); saved in checkpoint.pt"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -246,7 +254,7 @@ def compute_loss_pi(policy, data, clip_ratio):
     loss_pi = -(torch.min(ratio * adv, clip_adv)).mean()
     # Useful extra info (tutorial 002): approx_kl = E[log pi_old - log pi], as 002 writes it
     approx_kl = (logp_old - logp).mean().item()
-    ent = pi.entropy().sum(-1).mean().item()  # the Gaussian's entropy, all dimensions
+    ent = pi.entropy().sum(-1).mean().item()  # all dimensions' (002's mean: per dimension)
     clipped = ratio.gt(1 + clip_ratio) | ratio.lt(1 - clip_ratio)
     clipfrac = torch.as_tensor(clipped, dtype=torch.float32).mean().item()
     return loss_pi, dict(kl=approx_kl, ent=ent, cf=clipfrac, ratio=ratio.detach())
@@ -287,8 +295,10 @@ def update(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
 
 def update_minibatch(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
     """--update minibatch: update_epochs passes of num_minibatches shuffled minibatches, a
-    policy step and a value step on each (ppo_cartpole.py's ppo_update, CleanRL's); the early
-    stop, on the whole batch, ends the policy's steps for the rest of the update."""
+    policy step and a value step on each: ppo_cartpole.py's (and CleanRL's) loop, with this
+    script's losses, two optimizers and early stop (checked on the whole batch before each
+    policy step; once set, the value steps go on; --target-kl none: never, as CleanRL's
+    default). Advantages are normalised over the batch (batch_of), not per minibatch."""
     pi_l_old, pi_info_old = compute_loss_pi(policy, data, cfg.clip_ratio)
     pi_l_old, v_l_old = pi_l_old.item(), compute_loss_v(value_net, data).item()
     steps, stopped = 0, False
@@ -314,6 +324,9 @@ def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
     and value targets, without the autoreset steps. Also returns the raw obs the rollout met
     (for the statistics of the next one)."""
     raw = rollout["obs"][rollout["valid"]]
+    # The statistics have not moved since the rollout began: normalising now gives the very
+    # inputs pi_old acted on, so log pi_old and V can be computed here, in one batch (002's
+    # ac.step stores them while it collects)
     rollout["obs"] = obs_norm(rollout["obs"])
     if cfg.norm_reward:  # r / the running std of the discounted return, this rollout's in
         return_norm.update(rollout["discounted"][rollout["valid"]])
@@ -346,16 +359,30 @@ def after_update(policy, data, cfg, loss_pi, loss_v, entropy, pi_steps):
     ratio = common.ratio_stats(info["ratio"], data["adv"], cfg.clip_ratio)
     return dict(loss_pi=loss_pi, loss_v=loss_v, approx_kl=info["kl"], clipfrac=info["cf"],
                 entropy=entropy, pi_steps=pi_steps, std_min=std.min().item(),
-                std_max=std.max().item(), **{k: ratio[k] for k in common.RATIO_COLUMNS})
+                std_max=std.max().item(), **{k: ratio[k] for k in common.RATIO_COLUMNS
+                                             if k != "clipfrac_after"})  # = clipfrac here
 
 
 def final_distance(trajectories):
     """Reacher: the fingertip's mean distance to the target at the last step of the evaluation
-    episodes (its obs ends with fingertip - target, x and y); nan for another env."""
+    episodes, in the obs the last action was chosen in (it ends with fingertip - target, x
+    and y); nan for another env."""
     last = [episode["obs"][-1] for episode in trajectories]
     if not last or len(last[0]) != 10:  # Reacher-v5's obs has 10 numbers
         return float("nan")
     return float(np.mean([np.linalg.norm(obs[-2:]) for obs in last]))
+
+
+def evaluate(run, actor, device, info, step, last):
+    """eval_episodes episodes of mu(s), clipped, no sampling: evaluations.csv's row (with the
+    last update's numbers `last`), model.pt, best.pt, the pictures (report.after_evaluation)."""
+    cfg, seen = run.cfg, []  # seen: the evaluation's episodes, where the fingertip ended
+    returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
+                              cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
+    row = dict(last, distance=final_distance(seen))
+    best = run.evaluation(step, returns, **{key: row[key] for key in LOGGED})  # LOGGED's order
+    report.after_evaluation(run, actor, best, device, info, pictures(cfg),
+                            mujoco_env.gif_for(cfg.env_id))
 
 
 # evaluations.csv's own columns (the last update's numbers at each evaluation), once
@@ -366,19 +393,22 @@ LOGGED = dict(loss_pi=(None, "-L_CLIP before the update"), loss_v=(None, "L_VF b
               pi_steps=(None, "policy steps taken (the early stop: fewer)"),
               distance=(None, "fingertip to target, last step of each episode"),
               std_min=(None, "sigma, smallest dimension"), std_max=(None, "sigma, largest"),
-              **common.RATIO_COLUMNS)
+              **{k: v for k, v in common.RATIO_COLUMNS.items() if k != "clipfrac_after"})
 
 
 def pictures(cfg):
     """inside.png (docs/inside.md): sigma shrinking (exploration), the fingertip's distance, the
     policy steps the early stop allowed; r against [1 - eps, 1 + eps], how far pi moved."""
     band = (1 - cfg.clip_ratio, 1 + cfg.clip_ratio)
+    limits = () if cfg.target_kl is None else (cfg.target_kl, cfg.kl_stop_factor * cfg.target_kl)
     return dict(inside=[
         [plots.lines("std_min", "std_max", title="exploration: sigma of pi"),
          plots.lines("distance", title="reaching: distance at the end (Reacher)"),
-         plots.lines("pi_steps", title="policy steps on the last batch")],
+         plots.lines("pi_steps", title="policy steps on the last batch",
+                     ylim=(0, 1.05 * max(cfg.train_pi_iters, 10)))],
         [plots.spread("ratio", "r = pi/pi_old after the last update; dashed: 1 -+ eps", band),
-         plots.lines("approx_kl", title="approx_kl after the last update"),
+         plots.lines("approx_kl", title="approx_kl after the last update; dashed: target_kl"
+                     " and 1.5 x it", hlines=limits),
          plots.lines("clipfrac", title="clipfrac after the last update")]])
 
 
@@ -424,6 +454,8 @@ def train(cfg: Config):
     if cfg.resume:  # where the run stopped: its step and the loop's obs
         global_step, obs = checkpoints.resume(run.dir, SCRIPT, cfg, in_checkpoint)
     num_updates, stats = cfg.total_timesteps // (T * N), None  # stats: the progress line's
+    if global_step == 0:  # the untrained mean action: mu is near 0, the arm barely moves
+        evaluate(run, actor, device, actor_info, 0, dict.fromkeys(LOGGED))
 
     with checkpoints.CtrlC() as ctrl_c:
         for k in range(global_step // (T * N) + 1, num_updates + 1):
@@ -442,7 +474,8 @@ def train(cfg: Config):
                     np.clip(action, low, high))
                 global_step += N
                 discounted[:] = discounted * cfg.gamma * ~autoreset + reward  # --norm-reward's
-                # store step t, a reset step masked (ppo_cartpole.store_and_advance's rule)
+                # store step t; valid = ~autoreset: after an episode's end the vector env's
+                # next step is a reset step (its action ignored, reward 0), which trains nothing
                 buffer.store(t, obs, action, reward, terminated, truncated, valid=~autoreset,
                              discounted=discounted)
                 obs, autoreset = next_obs, terminated | truncated
@@ -463,12 +496,7 @@ def train(cfg: Config):
 
             # --- evaluate mu(s), no sampling, after the update that reaches each eval_every ---
             if global_step % cfg.eval_every < T * N or k == num_updates:
-                seen = []  # the evaluation's episodes: where the fingertip ended
-                returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
-                                          cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
-                best = run.evaluation(global_step, returns, **last, distance=final_distance(seen))
-                report.after_evaluation(run, actor, best, device, actor_info, pictures(cfg),
-                                        mujoco_env.gif_for(cfg.env_id))
+                evaluate(run, actor, device, actor_info, global_step, last)
             if (global_step % cfg.checkpoint_every < T * N or k == num_updates
                     or ctrl_c.pressed):  # between rollouts: the buffer holds nothing to keep
                 checkpoints.save(run.dir / "checkpoint.pt", SCRIPT, cfg, global_step, obs,
