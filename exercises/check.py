@@ -61,6 +61,7 @@ def exercise(name, m):
         outputs=getattr(m, "OUTPUTS", ("output",)), cases=getattr(m, "cases", list),
         worked_cases=getattr(m, "worked_cases", None), mistakes=getattr(m, "mistakes", None),
         narrow_mistakes=getattr(m, "narrow_mistakes", None),
+        config_names=getattr(m, "CONFIG_NAMES", {}),
         named_error=getattr(m, "named_error", None), cut=getattr(m, "cut", None),
         losses=getattr(m, "LOSSES", (0,)), gradient_mistake=getattr(m, "gradient_mistake", None),
         learned=getattr(m, "learned", None) or m.RUN.learned)

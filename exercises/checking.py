@@ -3,7 +3,10 @@ exercise's): the messages' language, the worked cases' tensors, the comparison o
 gradients, and the run of a plain exercise's worked cases with its named mistakes."""
 
 import copy
+import dataclasses
+import importlib
 import inspect
+import itertools
 from types import SimpleNamespace
 
 import numpy as np
@@ -171,9 +174,114 @@ def same_outputs(got, value):
     return same_value(got[0] if isinstance(got, tuple) else got, value)
 
 
+# ==== A case's settings: the hyperparameters it hands the function, beside the script's defaults
+
+
+class Reading:
+    """A case's cfg that notes which of its fields are read (and their values)."""
+
+    def __init__(self, cfg):
+        self.__dict__.update(cfg=cfg, read={})
+
+    def __getattr__(self, key):
+        value = getattr(self.cfg, key)
+        self.read[key] = value
+        return value
+
+
+def is_cfg(a):
+    return isinstance(a, SimpleNamespace) or dataclasses.is_dataclass(a) and not isinstance(a, type)
+
+
+def defaults(ex):
+    """{field: default} of the script's Config."""
+    script = importlib.import_module(ex.script)
+    return {f.name: f.default for f in dataclasses.fields(script.Config)}
+
+
+def number(a):
+    """A plain number (a bool, an int, a float or a one-number tensor) as Python's, else None."""
+    if torch.is_tensor(a) and a.numel() == 1:
+        return a.item()
+    return a if isinstance(a, (bool, int, float)) else None
+
+
+def read_settings(ex, args, call):
+    """(call(*args), the case's settings): one SimpleNamespace per hyperparameter handed to the
+    function, a field of a cfg among `args` that `call` reads, or an argument named as a field
+    of the script's Config (cases/<name>.py's CONFIG_NAMES: {argument: field} where the names
+    differ), with its index among args, its name as the function reads it (cfg.clip_coef, gamma),
+    its Config field, its value and the field's default."""
+    names = list(inspect.signature(getattr(ex.owner(), ex.function)).parameters)
+    fields, aliases = defaults(ex), getattr(ex, "config_names", None) or {}
+    reading = [Reading(a) if is_cfg(a) else a for a in args]
+    out = call(*reading)
+    found = []
+    for i, (name, a) in enumerate(zip(names, reading)):
+        if isinstance(a, Reading):
+            found += [SimpleNamespace(index=i, key=k, where=f"{name}.{k}", field=k, value=v,
+                                      default=fields[k]) for k, v in a.read.items() if k in fields]
+        elif aliases.get(name, name) in fields and number(a) is not None:
+            field = aliases.get(name, name)
+            found.append(SimpleNamespace(index=i, key=None, where=name, field=field,
+                                         value=number(a), default=fields[field]))
+    return out, found
+
+
+def with_defaults(args, chosen):
+    """The case's args with the settings `chosen` at the script's defaults."""
+    args = list(args)
+    for s in chosen:
+        if s.key is None:
+            args[s.index] = s.default
+        elif isinstance(args[s.index], SimpleNamespace):
+            args[s.index] = SimpleNamespace(**{**vars(args[s.index]), s.key: s.default})
+        else:
+            args[s.index] = dataclasses.replace(args[s.index], **{s.key: s.default})
+    return tuple(args)
+
+
+def first(out):
+    return out[0] if isinstance(out, tuple) else out
+
+
+def written_default(chosen):
+    """The label of the settings `chosen` written as the script's defaults."""
+    if len(chosen) == 1:
+        (s,) = chosen
+        return tr(f"{s.default!r}, the script's default, written as a number where "
+                  f"{s.where} is meant: any other setting would be ignored",
+                  f"把 {s.where} 写成了数字 {s.default!r}（脚本的默认值）：换成别的设置就不起作用了")
+    return tr("the script's defaults written as numbers where the inputs are meant ("
+              + ", ".join(f"{s.default!r} for {s.where}" for s in chosen)
+              + "): any other setting would be ignored",
+              "把输入写成了脚本默认值的数字（" + "，".join(
+                  f"{s.where} 写成了 {s.default!r}" for s in chosen)
+              + "）：换成别的设置就不起作用了")
+
+
+def default_mistakes(ex, args):
+    """(label, value) of a default written as a number where an input is meant: the script's
+    own answer with one or more of the case's settings at their defaults (only those that are
+    numbers, and differ from it in this case). None where that gives the right answer."""
+    own = getattr(ex.owner(), ex.function)
+    right, settings = read_settings(ex, args, own)
+    changed = [s for s in settings if s.value != s.default and not isinstance(s.value, bool)
+               and isinstance(s.default, (int, float)) and not isinstance(s.default, bool)]
+    found = []
+    for n in range(1, len(changed) + 1):
+        for chosen in itertools.combinations(changed, n):
+            value = first(own(*with_defaults(args, chosen)))
+            value = value.detach() if torch.is_tensor(value) else value
+            label = written_default(chosen)
+            found.append((label, None if same_outputs(value, first(right)) else value))
+    return found
+
+
 def listed_mistakes(ex, args, fn=None):
-    """(label, value) of each named mistake in the case `args` (None: not told apart there)."""
-    mistakes = ex.mistakes(*args)
+    """(label, value) of each named mistake in the case `args` (None: not told apart there),
+    a default written as a number last."""
+    mistakes = (ex.mistakes(*args) if ex.mistakes else []) + default_mistakes(ex, args)
     if ex.narrow_mistakes and fn is not None:  # several mistakes, one value in this case
         mistakes = ex.narrow_mistakes(mistakes, fn)
     return mistakes
@@ -186,8 +294,6 @@ def named_mistake(ex, args, got, fn=None, expected=None):
     Nor is one that `fn` does not give in every other case where it is computed: one case
     alone may not tell two mistakes apart, and an unnamed mistake is better than a misnamed
     one."""
-    if ex.mistakes is None:
-        return ""
     for label, value in listed_mistakes(ex, args, fn):
         if value is None:  # this mistake gives the right value in this case
             continue

@@ -198,7 +198,7 @@ WRONG = {
                     return beta / cfg.kl_tolerance
                 if d > cfg.d_targ * cfg.kl_tolerance:
                     return beta * cfg.kl_tolerance
-                return beta""", "(a)", "the tolerance (1.5) used as the factor"),
+                return beta""", "(a)", "the tolerance (cfg.kl_tolerance, 1.5 in the paper)"),
     ],
     "a2c_loss": [
         ("""def a2c_loss(model, data, cfg):

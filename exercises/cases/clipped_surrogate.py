@@ -27,13 +27,14 @@ def cases():
     data = dict(obs=torch.zeros(6, 1), act=torch.tensor([0, 0, 1, 1, 0, 1]),
                 adv=t(1.0, -1.0, 1.0, -1.0, 2.0, -3.0),
                 logp=torch.log(t(0.25, 0.25, 0.8, 0.8, 0.45, 0.45)))
-    # min(r A, clip(r, 0.8, 1.2) A) per sample: min(2, 1.2) = 1.2; min(-2, -1.2) = -2;
-    # min(0.625, 0.8) = 0.625; min(-0.625, -0.8) = -0.8; r = 10/9 inside the band: 20/9, -30/9.
-    # The loss is minus their mean.
-    terms = [1.2, -2.0, 0.625, -0.8, 20 / 9, -30 / 9]
-    return [(tr("r = 2, 2, 0.625, 0.625, 10/9, 10/9 against A = 1, -1, 1, -1, 2, -3; eps = 0.2",
-                "r = 2, 2, 0.625, 0.625, 10/9, 10/9，A = 1, -1, 1, -1, 2, -3；eps = 0.2"),
-             (policy, data, 0.2), (scalar(-sum(terms) / 6), None, None))]
+    # eps = 0.3, not the script's 0.2, so that 0.2 written as a number shows; the band is
+    # [0.7, 1.3]. min(r A, clip(r, 0.7, 1.3) A) per sample: min(2, 1.3) = 1.3; min(-2, -1.3) =
+    # -2; min(0.625, 0.7) = 0.625; min(-0.625, -0.7) = -0.7; r = 10/9 inside the band: 20/9,
+    # -30/9. Ratios above 1 and below it, against both signs of A. The loss is minus the mean.
+    terms = [1.3, -2.0, 0.625, -0.7, 20 / 9, -30 / 9]
+    return [(tr("r = 2, 2, 0.625, 0.625, 10/9, 10/9 against A = 1, -1, 1, -1, 2, -3; eps = 0.3",
+                "r = 2, 2, 0.625, 0.625, 10/9, 10/9，A = 1, -1, 1, -1, 2, -3；eps = 0.3"),
+             (policy, data, 0.3), (scalar(-sum(terms) / 6), None, None))]
 
 
 def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,

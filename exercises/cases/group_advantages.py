@@ -9,6 +9,7 @@ import runs
 SCRIPT = "grpo_addition"
 FUNCTION = "group_advantages"
 ORDER = 11  # its row in docs/exercises.md's table
+CONFIG_NAMES = dict(G="group_size", scale="scale_rewards")  # the Config fields they are
 OUTPUTS = ("adv",)
 RUN = runs.GRPO
 LOOP = runs.GRPO_LOOP

@@ -25,13 +25,15 @@ def loop_hint():
 
 def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no_mask=False,
                  token_mean=False, kl_sign=1.0, no_clip=False, ratio_one=False,
-                 kl_unmasked=False, always_norm=False, k1=False, all_mean=False):
+                 kl_unmasked=False, always_norm=False, k1=False, all_mean=False,
+                 inverted=False):
     """The loss element by element, in plain Python (and the named mistakes' versions)."""
     eps, per_completion, total, tokens = cfg.clip_coef, [], 0.0, 0.0
     for i in range(len(adv)):
         row = 0.0
         for j in range(logp.shape[1]):
-            r = 1.0 if ratio_one else math.exp(float(logp[i, j] - logp_old[i, j]))
+            r = 1.0 if ratio_one else math.exp(float(logp[i, j] - logp_old[i, j]) * (
+                -1 if inverted else 1))
             a = float(adv[i])
             s = r * a if no_clip else min(r * a, min(max(r, 1 - eps), 1 + eps) * a)
             x = float(logp[i, j] - logp_ref[i, j]) if kl_reversed else float(
@@ -50,7 +52,9 @@ def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no
 
 def cases():
     # Two completions of 3 tokens, the first with 2 of its own (its third is padding). Ratios
-    # 1.5, 0.9, 1.1 / 0.7, 1.05, 1.3 against A = 1.5, -0.5; pi_ref / pi of 2, 0.5, 0.76, ...
+    # 1.5, 0.9, 1.1 / 0.7, 1.05, 1.3 against A = 1.5, -0.5: above 1 and below it, 1.5 clipped
+    # to 1.25 and 0.7 to 0.75 by eps = 0.25 (not the script's 0.2, so that 0.2 written as a
+    # number shows); pi_ref / pi of 2, 0.5, 0.76, ...
     # (the padding token's pi_ref / pi is not 1: its KL term, and its gradient, are not 0, so
     # a KL left unmasked shows)
     logp_old = torch.log(t([0.4, 0.5, 0.6], [0.5, 0.4, 0.3]))
@@ -59,11 +63,11 @@ def cases():
     adv, mask = t(1.5, -0.5), t([1.0, 1.0, 0.0], [1.0, 1.0, 1.0])
     cases = []
     for norm in (True, False):
-        cfg = SimpleNamespace(clip_coef=0.2, beta=0.1, length_norm=norm)
+        cfg = SimpleNamespace(clip_coef=0.25, beta=0.1, length_norm=norm)
         args = (logp, logp_old, logp_ref, adv, mask, cfg)
-        cases.append((tr(f"2 completions of 3 tokens, the first's third masked; eps = 0.2, "
+        cases.append((tr(f"2 completions of 3 tokens, the first's third masked; eps = 0.25, "
                          f"beta = 0.1, length_norm = {norm}",
-                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.2，β = 0.1，"
+                         f"2 个回答各 3 个 token，第一个的第三个被掩掉；eps = 0.25，β = 0.1，"
                          f"length_norm = {norm}"), args,
                       (grpo_by_hand(*(a.detach() if torch.is_tensor(a) else a for a in args)),
                        None)))
@@ -103,6 +107,9 @@ def mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
             (tr("no clip: r * A alone, without min(.., clip(r) A)",
                 "没有裁剪：只用了 r * A，没有 min(.., clip(r) A)"),
              grpo_by_hand(*args, cfg, no_clip=True)),
+            (tr("the ratio upside down: pi_old / pi, exp(logp_old - logp)",
+                "比值倒过来了：π_old / π，即 exp(logp_old - logp)"),
+             grpo_by_hand(*args, cfg, inverted=True)),
             (tr("the ratio against logp itself (always 1): pi_old is logp_old",
                 "比值的分母用了 logp 自己（比值总是 1）：π_old 是 logp_old"),
              grpo_by_hand(*args, cfg, ratio_one=True)),

@@ -12,6 +12,7 @@ import runs
 SCRIPT = "ppo_kl_cartpole"
 FUNCTION = "compute_loss_pi"
 ORDER = 4  # its row in docs/exercises.md's table
+CONFIG_NAMES = dict(beta="beta_init")  # the first update's beta, Config's name
 OUTPUTS = ("loss_pi", "entropy", "info")
 RUN = runs.CARTPOLE
 LOOP = dict(runs.CARTPOLE_LOOP, total_timesteps=1280)
@@ -23,7 +24,8 @@ def loop_hint():
 
 
 def cases():
-    # pi = (0.5, 0.5), pi_old = (0.25, 0.75): r = 2 for action 0, 2/3 for action 1.
+    # pi = (0.5, 0.5), pi_old = (0.25, 0.75): r = 2 for action 0, 2/3 for action 1: one ratio
+    # above 1 and one below, so that pi_old / pi (1/2 and 3/2) shows.
     policy = Fixed(t([0.0, 0.0]).expand(2, 2), names=logits_names())
     logits_old = torch.log(t([0.25, 0.75], [0.25, 0.75]))
     data = dict(obs=torch.zeros(2, 1), act=torch.tensor([0, 1]), adv=t(1.0, -1.0),
@@ -42,7 +44,10 @@ def mistakes(policy, data, beta):
     r = torch.exp(dist.log_prob(data["act"]) - data["logp"])
     s, kl, reverse = (r * data["adv"]).mean(), kl_divergence(old, dist).mean(), kl_divergence(
         dist, old).mean()
-    return [(tr("the KL the other way round: KL(pi || pi_old); kl_divergence(p, q) is KL(p || q)",
+    inverted = (torch.exp(data["logp"] - dist.log_prob(data["act"])) * data["adv"]).mean()
+    return [(tr("the ratio upside down: pi_old / pi, exp(logp_old - logp)",
+                "比值倒过来了：π_old / π，即 exp(logp_old - logp)"), -inverted + beta * kl),
+            (tr("the KL the other way round: KL(pi || pi_old); kl_divergence(p, q) is KL(p || q)",
                 "KL 的方向反了：写成了 KL(π || π_old)；kl_divergence(p, q) 是 KL(p || q)"),
              -s + beta * reverse),
             (tr("the surrogate's sign: +mean(r A) where the loss has -mean(r A)",

@@ -1,10 +1,13 @@
 """The checks of exercises/reward_to_go.py, REINFORCE's reward-to-go of one whole episode, G_T =
 last_value: its worked cases, its named mistakes and its runs."""
 
+import importlib
+from types import SimpleNamespace
+
 import numpy as np
 import torch
 
-from checking import tr, Failed, t, as_list, compare
+from checking import tr, Failed, t, as_list, compare, written_default
 import runs
 
 SCRIPT = "reinforce_cartpole"
@@ -96,7 +99,10 @@ def reward_to_go_mistakes(rewards, gamma, last_value):
           for i, g in enumerate(back(lambda x, G: x + gamma * G, 0.0))]),
         (tr("the returns in reverse order: appended in the backward loop and not turned round "
             "(returns[T - 1 - t] holds G_t)", "回报的顺序反了：在往回的循环里 append，最后没有"
-            "倒过来（returns[T - 1 - t] 里放的是 G_t）"), right[::-1])]
+            "倒过来（returns[T - 1 - t] 里放的是 G_t）"), right[::-1])] + [
+        (written_default([SimpleNamespace(where="gamma", default=default)]),
+         back(lambda x, G: x + default * G, last_value))
+        for default in [importlib.import_module(SCRIPT).Config.gamma] if default != gamma]
 
 
 def worked_cases(fn):

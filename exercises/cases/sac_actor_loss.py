@@ -60,11 +60,12 @@ class SacActor(torch.nn.Module):
 
 
 def sac_case(mean, log_std, eps, low, high):
-    """obs (B, 2); Q1(s, a) = s_0 + sum(a), Q2(s, a) = s_1 + 2 sum(a): the smaller one differs
-    from row to row; alpha = 0.5."""
+    """obs (B, 2); Q1(s, a) = s_0 + sum(a), Q2(s, a) = s_1 + 2 sum(a): in every case Q1 is the
+    smaller in the first row (sum(a) > -1 there) and Q2 in the second (sum(a) < 5), so that an
+    answer taking one critic alone, or the larger, shows; alpha = 0.5."""
     mean, log_std, eps = t(*mean), t(*log_std), t(*eps)
     low, high = t(*low), t(*high)
-    obs = t([0.0, 1.0], [1.0, -0.5])
+    obs = t([0.0, 1.0], [5.0, 0.0])
     return (mean, log_std, eps, (high - low) / 2, (high + low) / 2, obs, scalar(0.5))
 
 
@@ -101,8 +102,8 @@ def sac_variant(actor, obs, alpha, correction="exact", q_at="a", logp_of="u", re
     logp = per_dim.sum(-1) if reduce == "sum" else per_dim.mean(-1)
     at = {"a": a, "u": u, "tanh": torch.tanh(u)}[q_at]
     at = at.detach() if detach_a else at
-    pick = torch.min if critics == "min" else torch.max
-    q = pick(critic(obs, at), critic2(obs, at))
+    q1, q2 = critic(obs, at), critic2(obs, at)
+    q = dict(min=torch.min, max=torch.max, q1=lambda a, b: a, q2=lambda a, b: b)[critics](q1, q2)
     return (entropy * alpha * (logp.detach() if detach_logp else logp) - q).mean(), logp
 
 
@@ -139,6 +140,12 @@ def sac_value_mistakes():
             "各维密度的乘积）"), dict(reduce="mean")),
         (tr("max(Q1, Q2) where SAC takes the smaller", "取了 max(Q1, Q2)，SAC 取较小的"),
          dict(critics="max")),
+        (tr("Q1 alone where SAC takes min(Q1, Q2): the smaller of the two critics is what "
+            "curbs the overestimation", "只用了 Q1，SAC 取 min(Q1, Q2)：正是取两个评论员中较小的"
+            "那个，才压住了高估"), dict(critics="q1")),
+        (tr("Q2 alone where SAC takes min(Q1, Q2): the smaller of the two critics is what "
+            "curbs the overestimation", "只用了 Q2，SAC 取 min(Q1, Q2)：正是取两个评论员中较小的"
+            "那个，才压住了高估"), dict(critics="q2")),
         (tr("the entropy term's sign: the loss is alpha * log pi - Q (a lower log pi, more "
             "entropy, lowers it)", "熵那一项的符号反了：损失是 alpha * log π - Q（log π 越小、熵越大，损失越小）"),
          dict(entropy=-1.0))]

@@ -1,9 +1,12 @@
 """The checks of exercises/soft_update.py, the soft target update: its worked cases, its named
 mistakes and its runs."""
 
+import importlib
+from types import SimpleNamespace
+
 import torch
 
-from checking import tr, Failed
+from checking import tr, Failed, written_default
 import runs
 
 SCRIPT = "ddpg_walker"
@@ -60,6 +63,9 @@ def worked_cases(fn):
                             "theta, where it is tau * theta",
                             "当前网络那一项漏了 tau：写成了 theta' = (1 - tau) * theta' + theta，"
                             "应该是 tau * theta")}
+    tau = importlib.import_module(SCRIPT).Config.tau  # the script's, written as a number
+    known[(tau, round(tau + (1 - tau) * tau, 6))] = written_default(
+        [SimpleNamespace(where="tau", default=tau)])
     for expected, got in zip((0.1, 0.19), seen):
         if got != [expected] * 3:
             label = next((label for pair, label in known.items()
