@@ -10,7 +10,7 @@ import pytest
 import torch
 
 import ppo_reacher as ppo
-from conftest import interrupt, run_main
+from conftest import interrupt, run_folders, run_main
 
 SHORT = dict(num_steps=100, eval_every=200, eval_episodes=2, train_pi_iters=5, train_v_iters=5,
              print_every=100)
@@ -190,7 +190,7 @@ def test_ctrl_c_then_resume_is_the_unbroken_run_with_its_statistics(tmp_path, ex
     code, out, err = interrupt("ppo_reacher.py", *flags(**run), "--run-dir", tmp_path / "cut",
                                after="step      600")
     assert code == 130, err
-    (cut,) = (tmp_path / "cut").iterdir()
+    (cut,) = run_folders(tmp_path / "cut")
     stopped = torch.load(cut / "checkpoint.pt", weights_only=True)["global_step"]
     assert 600 <= stopped < 1200 and f"its checkpoint is at step {stopped}" in out
     ppo.train(ppo.Config(resume=str(cut)))
