@@ -155,7 +155,8 @@ def parse_config(cls, argv=None, description=None):
         text = docs.get(f.name, "") + (f"; none on the command line: {flag} none"
                                        if "None" in name else "")
         chinese = zh_docs.get(f.name, "（还没有中文说明）") + (
-            f"；默认不设（命令行上写 {flag} none 也表示不设）" if "None" in name else "")
+            "" if "None" not in name else f"；默认不设（命令行上写 {flag} none 也表示不设）"
+            if f.default is None else f"；命令行上写 {flag} none 表示不设")
         text = (text + (f"\n{chinese}" if zh else "")).replace("%", "%%")
         hidden = f.name in unused  # out of --help, and absent unless given (then refused)
         parser.add_argument(flag, default=argparse.SUPPRESS if hidden else f.default, **how,
