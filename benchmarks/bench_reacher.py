@@ -6,7 +6,8 @@ deterministic action (the mean, clipped to the box), eval env seeded 10000 (our 
 common.evaluate), at 200k, 500k and 1M env steps, and the wall-clock seconds from the start
 of the process to each. SB3's evaluation normalizes the obs with its VecNormalize statistics,
 frozen, as zoo's enjoy does. Our steps count the autoreset steps (one in 51 on Reacher);
-SB3's do not. Each run's row goes to the record as it ends.
+SB3's do not. Each pair's row goes to the record as it ends; run again, it goes on with the
+seeds the record lacks.
 
     pip install -r benchmarks/requirements.txt
     python benchmarks/bench_reacher.py                 # seeds 0-4: ~1 hour on 2 cores
@@ -129,10 +130,14 @@ def main():
     if args.sb3:
         sb3(args.seed, args.out or os.devnull)
         return
-    record = dict(settings=dict(zoo=ZOO, ours=ours("K")[2:], at=AT, evaluation=EVAL),
-                  runs=[])
+    settings = dict(zoo=ZOO, ours=ours("K")[2:], at=AT, evaluation=EVAL)
+    record = json.loads(RECORD.read_text()) if RECORD.exists() else dict(settings=settings,
+                                                                         runs=[])
+    if record["settings"] != json.loads(json.dumps(settings)):
+        sys.exit(f"{RECORD} was measured with other settings: move it away to start anew")
+    done = {run["seed"] for run in record["runs"]}  # a stopped benchmark goes on from there
     with tempfile.TemporaryDirectory() as tmp:
-        for seed in args.seeds:
+        for seed in [s for s in args.seeds if s not in done]:
             record["runs"].append(pair(seed, tmp))
             RECORD.write_text(json.dumps(record, indent=1) + "\n")  # as each pair ends
             print(json.dumps(record["runs"][-1]), flush=True)
