@@ -12,6 +12,8 @@ benchmarks/results/<script>_1m/seed<k>/ as it grows.
     python benchmarks/ddpg_walker_1m.py plot --script td3_walker   # TD3's runs beside DDPG's
     python benchmarks/ddpg_walker_1m.py at 300000          # DDPG, TD3 and SAC at equal steps
     python benchmarks/ddpg_walker_1m.py plot --script sac_walker   # the three, to SAC's last step
+    python benchmarks/ddpg_walker_1m.py start ~/ppo-1m --script ppo_reacher   # PPO, 3 seeds
+    python benchmarks/ddpg_walker_1m.py plot --script ppo_reacher  # PPO beside the three
 
 The measure (as in the TD3 paper's ablation table): per seed, the mean of the last 10
 evaluations (each the mean return of 10 episodes without exploration noise); over the seeds,
@@ -32,13 +34,26 @@ import torch
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPT = "ddpg_walker"  # or td3_walker (--script)
 SEEDS, BUDGET = (0, 1, 2, 3, 4), 1_000_000
+ALL = SEEDS
+# PPO on Walker2d: ppo_reacher.py with CleanRL's settings for MuJoCo (its --update minibatch,
+# rollouts of 2000 steps (CleanRL: 2048), lambda 0.95, both step sizes 3e-4 annealed, gradient
+# norms clipped at 0.5, rewards scaled by the return's std, no early stop), 3 seeds; its
+# records go to benchmarks/results/ppo_walker_1m/
+FLAGS = {"ppo_reacher": ["--env-id", "Walker2d-v5", "--update", "minibatch", "--num-steps",
+                         "2000", "--lam", "0.95", "--vf-lr", "3e-4", "--max-grad-norm", "0.5",
+                         "--anneal-lr", "--norm-reward", "--target-kl", "none",
+                         "--eval-every", "5000", "--print-every", "10000", "--no-gifs"]}
+SEEDS_OF = {"ppo_reacher": (0, 1, 2), "sac_walker": (0, 1, 2)}
+RECORDS = {"ppo_reacher": "ppo_walker_1m"}
 MILESTONES = (100_000, 300_000, 500_000, 1_000_000)
 
 
 def record(seed, script=None):
     """The committed copy of a run's evaluations.csv:
     benchmarks/results/<script>_1m/seed<k>/evaluations.csv (script: SCRIPT unless given)."""
-    return ROOT / "benchmarks" / "results" / f"{script or SCRIPT}_1m" / f"seed{seed}" / "evaluations.csv"
+    script = script or SCRIPT
+    return (ROOT / "benchmarks" / "results" / RECORDS.get(script, f"{script}_1m") / f"seed{seed}"
+            / "evaluations.csv")
 
 
 def run_of(parent, seed):
@@ -79,7 +94,8 @@ def start(parent, seeds=SEEDS):
             # e.g. on a new machine: the record is already complete; rerunning would only repeat it
             print(f"seed {seed}: finished (its record {committed.relative_to(ROOT)} reaches 1M)")
             continue
-        how = ["--resume", str(run)] if step else ["--seed", str(seed), "--run-dir", str(parent)]
+        how = (["--resume", str(run)] if step else
+               ["--seed", str(seed), "--run-dir", str(parent), *FLAGS.get(SCRIPT, [])])
         log = open(parent / f"seed{seed}.log", "a")
         # nice: other work on the machine comes first; the runs use what is left.
         proc = subprocess.Popen(["nice", "-n", "19", sys.executable, str(ROOT / f"{SCRIPT}.py"),
@@ -166,7 +182,8 @@ def mean_and_se(values):
     return mean, sd / len(values) ** 0.5
 
 
-NAMES = {"ddpg_walker": "DDPG", "td3_walker": "TD3", "sac_walker": "SAC"}
+NAMES = {"ddpg_walker": "DDPG", "td3_walker": "TD3", "sac_walker": "SAC",
+         "ppo_reacher": "PPO (ppo_reacher.py, CleanRL's settings)"}
 
 
 def at_equal_steps(at):
@@ -179,7 +196,7 @@ def at_equal_steps(at):
     print("|---|---|---|---|---|---|")
     for script, name in NAMES.items():
         seeds, lasts, highs = [], [], []
-        for seed in SEEDS:
+        for seed in SEEDS_OF.get(script, ALL):
             path = record(seed, script)
             rows = read(path) if path.exists() else []
             if rows and rows[-1][0] >= at:
@@ -201,14 +218,15 @@ def plot():
     sys.path.insert(0, str(ROOT))
     import plots
     scripts = {"ddpg_walker": ["ddpg_walker"], "td3_walker": ["ddpg_walker", "td3_walker"],
-               "sac_walker": list(NAMES)}[SCRIPT]
+               "sac_walker": ["ddpg_walker", "td3_walker", "sac_walker"],
+               "ppo_reacher": list(NAMES)}[SCRIPT]
     # SAC's picture ends where SAC's furthest run is: the three at equal steps
     upto = (max(read(record(s, SCRIPT))[-1][0] for s in SEEDS if record(s, SCRIPT).exists())
             if SCRIPT == "sac_walker" else BUDGET)
     with tempfile.TemporaryDirectory() as tmp:
         runs = []
         for script in scripts:
-            for seed in SEEDS:
+            for seed in SEEDS_OF.get(script, ALL):
                 path = record(seed, script)
                 if path.exists():  # in a folder named as run folders are: plots.py knows its script
                     run = Path(tmp) / f"{script}__Walker2d-v5__seed{seed}__record"
@@ -221,19 +239,20 @@ def plot():
 
 
 def main():
-    global SCRIPT
+    global SCRIPT, SEEDS
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("action", choices=("start", "status", "table", "plot", "at"))
     parser.add_argument("parent", nargs="?", help="folder of the five run folders (at: the step)")
-    parser.add_argument("--script", default=SCRIPT, choices=("ddpg_walker", "td3_walker", "sac_walker"))
-    parser.add_argument("--seeds", type=int, nargs="+", default=SEEDS,
+    parser.add_argument("--script", default=SCRIPT, choices=tuple(NAMES))
+    parser.add_argument("--seeds", type=int, nargs="+", default=None,
                         help="start: only these seeds (the others wait for a later start)")
     args = parser.parse_args()
     SCRIPT = args.script
+    SEEDS = SEEDS_OF.get(SCRIPT, ALL)  # the script's seeds: status and table
     if args.action in ("start", "status", "at") and args.parent is None:
         parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m"
                      if args.action != "at" else "at needs a step, e.g. at 300000")
-    {"start": lambda: start(Path(args.parent), args.seeds),
+    {"start": lambda: start(Path(args.parent), args.seeds or SEEDS),
      "status": lambda: status(Path(args.parent)), "table": table, "plot": plot,
      "at": lambda: at_equal_steps(int(args.parent))}[args.action]()
 
