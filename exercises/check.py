@@ -41,7 +41,7 @@ sys.path.insert(0, str(HERE.parent / "experiments"))
 
 import checking  # noqa: E402
 import help_zh  # noqa: E402
-from checking import Failed, error, tr  # noqa: E402
+from checking import Failed, raised, tr  # noqa: E402
 from lab import swapped  # noqa: E402
 from runs import HOLD  # noqa: E402, F401  (the scripts' tests read it here)
 
@@ -164,7 +164,7 @@ def real_loop(ex, fn):
         except Exception as e:  # noqa: BLE001  the learner's error, named in one line
             raise Failed(tr(f"in {ex.script}.train(), at call {calls[0]} of your function: ",
                             f"在 {ex.script}.train() 里，你的函数第 {calls[0]} 次被调用时出错：")
-                         + error(e, first_line=True))
+                         + raised(e, fn))
     if calls[0] == 0:
         raise never_called(ex, tr("stage (b)", "第 (b) 关"))
     unit = tr(*ex.run.unit)
@@ -270,7 +270,7 @@ def check(name, fn=None, learning=True, say=print):
             say(line(name, stage, fail, str(e)))
             return False
         except Exception as e:  # noqa: BLE001  the learner's code raised: name it
-            say(line(name, stage, fail, tr("your function raised ", "你的函数抛出了 ") + error(e)))
+            say(line(name, stage, fail, raised(e, fn)))
             return False
         seconds = time.time() - start
         say(line(name, stage, tr(f"pass ({seconds:.1f} s)", f"通过（{seconds:.1f} 秒）"),

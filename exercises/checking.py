@@ -7,6 +7,8 @@ import dataclasses
 import importlib
 import inspect
 import itertools
+import traceback
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -77,11 +79,56 @@ def as_list(x):
         return None
 
 
-def error(e, first_line=False):
-    """An exception raised by the learner's code: its type, then its message (Python's own
-    words, in English), after the language's colon."""
-    text = str(e).splitlines()[0] if first_line and str(e) else str(e)
-    return f"{type(e).__name__}" + (tr(": ", "：") + text if text else "")
+# What an error of the learner's code most likely means, from Python's and torch's words
+CAUSES = [
+    (("modified by an inplace operation", "in-place operation"), (
+        "an in-place operation (+=, x[i] = ..., .add_()) on a tensor that autograd needs for "
+        "the gradient: write it as a new tensor (x = x + ...)",
+        "对自动求导要用的张量做了原地操作（+=、x[i] = ...、.add_()）：改成新建一个张量（x = x + ...）")),
+    (("must match the size", "size of tensor", "shape", "mat1 and mat2", "Expected size",
+      "dimension", "too many indices", "out of range", "expand"), (
+        "a shape error: two tensors whose shapes do not fit (print each one's .shape; a (B,) "
+        "against a (B, L) needs adv[:, None])",
+        "形状错误：两个张量的形状对不上（把它们的 .shape 打印出来；(B,) 和 (B, L) 相乘要写 "
+        "adv[:, None]）")),
+    (("dtype", "scalar type", "Long", "Bool"), (
+        "a dtype error: tensors of different types (float against long or bool, float64 "
+        "against float32): .float(), or dtype=torch.float32 where you make one",
+        "类型错误：张量的 dtype 不一样（float 对 long 或 bool，float64 对 float32）：用 .float()，"
+        "或者新建张量时写 dtype=torch.float32")),
+    (("device", "CUDA", "cuda"), (
+        "a device error: tensors on different devices: make new ones where the inputs are "
+        "(torch.zeros_like(x), or device=x.device)",
+        "设备错误：张量不在同一个设备上：新建的张量要放在输入所在的设备上（torch.zeros_like(x)，"
+        "或者写 device=x.device）")),
+]
+
+
+def raised(e, fn=None):
+    """One line for an error raised by the learner's code: where (the learner's file and line:
+    the last frame of `fn`'s file), the likely cause (in-place, shape, dtype, device) and
+    Python's own words, not a traceback."""
+    text = str(e).splitlines()[0] if str(e) else ""
+    own = getattr(getattr(fn, "__code__", None), "co_filename", None)
+    frames = [f for f in traceback.extract_tb(e.__traceback__) if own and f.filename == own]
+    where = ""
+    if own:
+        path, root = Path(own), Path(__file__).resolve().parent.parent
+        shown = path.relative_to(root).as_posix() if root in path.parents else path.name
+        where = tr(f" in the gradient of what {shown} returned",
+                   f"（在对 {shown} 的返回值求梯度时）")  # raised where none of its lines runs
+    if frames:
+        code, n = (frames[-1].line or "").strip(), frames[-1].lineno
+        where = tr(f" at {shown} line {n}" + (f" ({code})" if code else ""),
+                   f"（{shown} 第 {n} 行" + (f"：{code}" if code else "") + "）")
+    cause = next((tr(*words) for needles, words in CAUSES
+                  if isinstance(e, (RuntimeError, IndexError, ValueError, AssertionError))
+                  and any(n in text for n in needles)), "")
+    head = tr(f"your code raised {type(e).__name__}{where}",
+              f"你的代码抛出了 {type(e).__name__}{where}")
+    if cause:
+        return head + tr(": ", "：") + cause + (tr(f" [{text}]", f"［{text}］") if text else "")
+    return head + (tr(": ", "：") + text if text else "")
 
 
 def compare(name, got, expected):
@@ -352,8 +399,7 @@ def check_cases(ex, fn):
             named = ex.named_error(e) if ex.named_error else ""
             if named:
                 raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
-                             + f"{show(ex, args)}\n  " + tr("your function raised ", "你的函数抛出了 ")
-                             + error(e) + named) from None
+                             + f"{show(ex, args)}\n  " + raised(e, fn) + named) from None
             raise
         for a, b in zip(args, saved):
             if torch.is_tensor(a) and not torch.equal(a, b):

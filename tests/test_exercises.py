@@ -1007,9 +1007,11 @@ def test_messages_in_chinese(monkeypatch, capsys):
     passed, lines = run("td_target", getattr(ex.owner(), ex.function))
     assert passed and lines[0].startswith("td_target：第 (a) 关“手算的例子”通过（") \
         and lines[0].endswith(" 秒）"), lines
-    passed, lines = run("td_target", lambda *args: 1 / 0)
-    assert lines == ["td_target：第 (a) 关“手算的例子”未通过：你的函数抛出了 "
-                     "ZeroDivisionError：division by zero"]
+    passed, lines = run("td_target", compile_answer("def td_target(*args):\n    return 1 / 0",
+                                                    "td_target"))
+    line = HEADER.count("\n") + 2  # the answer's second line, after the imports
+    assert lines == ["td_target：第 (a) 关“手算的例子”未通过：你的代码抛出了 "
+                     f"ZeroDivisionError（<string> 第 {line} 行）：division by zero"], lines
     own = {name: getattr(ex.owner(), ex.function) for name, ex in check.EXERCISES.items()}
     monkeypatch.setattr(check, "load", lambda name: own[name] if name != "gae" else blank)
     with pytest.raises(SystemExit):
