@@ -14,6 +14,7 @@ benchmarks/results/<script>_1m/seed<k>/ as it grows.
     python benchmarks/ddpg_walker_1m.py plot --script sac_walker   # the three, to SAC's last step
     python benchmarks/ddpg_walker_1m.py start ~/ppo-1m --script ppo_reacher   # PPO, 3 seeds
     python benchmarks/ddpg_walker_1m.py plot --script ppo_reacher  # PPO beside the three
+    python benchmarks/ddpg_walker_1m.py at 500000 --script ppo_reacher   # the four at 500k
 
 The measure (as in the TD3 paper's ablation table): per seed, the mean of the last 10
 evaluations (each the mean return of 10 episodes without exploration noise); over the seeds,
@@ -186,7 +187,7 @@ NAMES = {"ddpg_walker": "DDPG", "td3_walker": "TD3", "sac_walker": "SAC",
          "ppo_reacher": "PPO (ppo_reacher.py, CleanRL's settings)"}
 
 
-def at_equal_steps(at):
+def at_equal_steps(at, scripts=("ddpg_walker", "td3_walker", "sac_walker")):
     """docs/results.md's SAC table: each script's committed records at `at` env steps, side by
     side. Per seed: the mean of the last 10 evaluations up to `at`, and the highest evaluation
     up to `at`; over the seeds that have reached `at`: their mean and its standard error."""
@@ -194,8 +195,8 @@ def at_equal_steps(at):
     print(f"| algorithm | seeds | last 10 up to {k}, each seed | their mean (se) | "
           f"highest up to {k}, each seed | their mean (se) |")
     print("|---|---|---|---|---|---|")
-    for script, name in NAMES.items():
-        seeds, lasts, highs = [], [], []
+    for script in scripts:
+        name, seeds, lasts, highs = NAMES[script], [], [], []
         for seed in SEEDS_OF.get(script, ALL):
             path = record(seed, script)
             rows = read(path) if path.exists() else []
@@ -254,7 +255,8 @@ def main():
                      if args.action != "at" else "at needs a step, e.g. at 300000")
     {"start": lambda: start(Path(args.parent), args.seeds or SEEDS),
      "status": lambda: status(Path(args.parent)), "table": table, "plot": plot,
-     "at": lambda: at_equal_steps(int(args.parent))}[args.action]()
+     "at": lambda: at_equal_steps(int(args.parent), *(  # --script ppo_reacher: PPO too
+         [list(NAMES)] if SCRIPT == "ppo_reacher" else []))}[args.action]()
 
 
 if __name__ == "__main__":
