@@ -3,8 +3,9 @@
 Both side by side, one process each, each at one torch thread: seed k of ours beside seed k of
 SB3, seeds 0-4, 1M env steps. Both are measured alike: the mean return of 10 episodes of the
 deterministic action (the mean, clipped to the box), eval env seeded 10000 (our evaluation,
-common.evaluate), at 200k, 500k and 1M env steps, and the wall-clock seconds from the start
-of the process to each. SB3's evaluation normalizes the obs with its VecNormalize statistics,
+common.evaluate), at 200k, 500k and 1M env steps, and the seconds from the start of the
+process to each: wall-clock, and the CPU time the process had (on a busy machine the fairer
+measure of the two: it does not count the time another process held the core). SB3's evaluation normalizes the obs with its VecNormalize statistics,
 frozen, as zoo's enjoy does. Our steps count the autoreset steps (one in 51 on Reacher);
 SB3's do not. Each pair's row goes to the record as it ends; run again, it goes on with the
 seeds the record lacks.
@@ -62,7 +63,7 @@ def sb3(seed, out):
                     return model.predict(env.normalize_obs(obs), deterministic=True)[0]
                 returns = common.evaluate("Reacher-v5", act, EVAL["episodes"], EVAL["seed"])
                 rows.append(dict(step=self.num_timesteps, mean=statistics.mean(returns),
-                                 seconds=time.time() - START))
+                                 seconds=time.time() - START, cpu=time.process_time()))
                 print(f"evaluation at step {self.num_timesteps}: {rows[-1]['mean']:.2f}",
                       flush=True)
             return True
@@ -77,12 +78,22 @@ def ours(seed):
             "--print-every", "100000", "--threads", "1"]
 
 
+def cpu_seconds(pid):
+    """The CPU time (user + system) process `pid` has had so far (Linux: /proc), or None."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def watch(proc, rows, start):
-    """Read a run's lines as they come: (step, mean, seconds) at AT."""
+    """Read a run's lines as they come: (step, mean, seconds, cpu) at AT."""
     for line in proc.stdout:
         m = LINE.match(line)
         if m and int(m[1]) in AT:
-            rows.append(dict(step=int(m[1]), mean=float(m[2]), seconds=time.time() - start))
+            rows.append(dict(step=int(m[1]), mean=float(m[2]), seconds=time.time() - start,
+                             cpu=cpu_seconds(proc.pid)))
 
 
 def pair(seed, tmp):
@@ -104,15 +115,17 @@ def pair(seed, tmp):
 def table(record):
     """Markdown: per step count, the median [min, max] over seeds of each, and seconds."""
     runs = record["runs"]
-    lines = ["| Reacher-v5 | steps | mean return, median [min, max] | seconds, median |",
-             "|---|---|---|---|"]
+    lines = ["| Reacher-v5 | steps | mean return, median [min, max] | seconds, median | "
+             "CPU seconds, median |", "|---|---|---|---|---|"]
     for who, name in (("ours", "ppo_reacher.py"), ("sb3", "SB3 PPO, rl-zoo settings")):
         for step in AT:
             got = [r for run in runs for r in run[who] if r["step"] == step]
             means, secs = [r["mean"] for r in got], [r["seconds"] for r in got]
+            cpus = [r["cpu"] for r in got if r.get("cpu") is not None]
+            cpu = f"{statistics.median(cpus):.0f} ({len(cpus)} seeds)" if cpus else "-"
             lines.append(f"| {name} ({len(got)} seeds) | {step:,} | "
                          f"{statistics.median(means):.2f} [{min(means):.2f}, {max(means):.2f}]"
-                         f" | {statistics.median(secs):.0f} |")
+                         f" | {statistics.median(secs):.0f} | {cpu} |")
     return "\n".join(lines)
 
 
