@@ -113,7 +113,8 @@ def pair(seed, tmp):
 
 
 def table(record):
-    """Markdown: per step count, the median [min, max] over seeds of each, and seconds."""
+    """Markdown: per step count, the median [min, max] over seeds of each, and seconds. One
+    decimal: our runs' progress lines give their means so (the evaluation's line)."""
     runs = record["runs"]
     lines = ["| Reacher-v5 | steps | mean return, median [min, max] | seconds, median | "
              "CPU seconds, median |", "|---|---|---|---|---|"]
@@ -124,7 +125,7 @@ def table(record):
             cpus = [r["cpu"] for r in got if r.get("cpu") is not None]
             cpu = f"{statistics.median(cpus):.0f} ({len(cpus)} seeds)" if cpus else "-"
             lines.append(f"| {name} ({len(got)} seeds) | {step:,} | "
-                         f"{statistics.median(means):.2f} [{min(means):.2f}, {max(means):.2f}]"
+                         f"{statistics.median(means):.1f} [{min(means):.1f}, {max(means):.1f}]"
                          f" | {statistics.median(secs):.0f} | {cpu} |")
     return "\n".join(lines)
 
