@@ -4,6 +4,7 @@ tables still agreeing with the code; the English one short, its docs pages there
 DDPG 1M table in docs/results.md the one the committed records give."""
 
 import dataclasses
+import json
 import importlib
 import importlib.util
 import re
@@ -366,3 +367,37 @@ def test_results_tabular_table_comes_from_the_committed_record(path):
     rows = bench.summary_rows(json.loads(bench.OUT.read_text()))
     for row in rows[2:] if path != RESULTS else rows:  # the Chinese page: its own header
         assert row in lines, f"{path.name} lacks the Sarsa / Q-learning table row {row!r}"
+
+
+PPO_PAGES = [(RESULTS, "## PPO on the arm", "## PPO on Walker2d-v5"),
+             (ROOT / "docs" / "results.zh-CN.md", "## 机械臂上的 PPO", "## Walker2d-v5 上的 PPO")]
+
+
+def test_the_ppo_sections_are_their_records(capsys):
+    """The PPO-on-Reacher table is what `bench_reacher.py --table` prints from its record
+    (the English page word for word; the Chinese page its numbers, row by row), and the
+    PPO-on-Walker2d tables what `ddpg_walker_1m.py table` and `at 300000 --script ppo_reacher`
+    print from the committed evaluations.csv files."""
+    spec = importlib.util.spec_from_file_location("bench_reacher",
+                                                  ROOT / "benchmarks" / "bench_reacher.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    reacher = bench.table(json.loads(bench.RECORD.read_text())).splitlines()
+    module = walkers_1m()
+    module.SCRIPT, module.SEEDS = "ppo_reacher", module.SEEDS_OF["ppo_reacher"]
+    module.table()
+    module.at_equal_steps(300_000, list(module.NAMES))
+    walker = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ")
+              and not line.startswith(("| seed |", "| algorithm |"))]  # the rows, not headers
+    for path, arm, walk in PPO_PAGES:
+        page = path.read_text(encoding="utf-8")
+        arm_section = page.split(arm)[1].split("\n## ")[0]
+        walk_section = page.split(walk)[1].split("\n## ")[0]
+        for row in reacher[2:]:  # numbers, in order, on one line of the section
+            cells = re.findall(r"-?[\d,]+(?:\.\d+)?|-(?= \|)", row.split(" | ", 1)[1])
+            assert any(re.findall(r"-?[\d,]+(?:\.\d+)?|-(?= \|)", line.split(" | ", 1)[-1])
+                       == cells for line in arm_section.splitlines() if line.startswith("| ")), (
+                f"{path.name}'s PPO-on-Reacher table lacks the record's row {row!r}")
+        for row in walker:
+            numbers = row.split(" | ", 1)[1] if " | " in row else row
+            assert numbers in walk_section, f"{path.name}'s PPO-on-Walker2d section lacks {row!r}"
