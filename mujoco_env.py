@@ -18,10 +18,12 @@ GIF = dict(max_frames=250, every=4, scale=2, camera_name="track")
 
 
 def gif_for(env_id):
-    """GIF's settings for `env_id`: every 4th frame of a 1000-step episode, every frame of a
-    short one (Reacher's 50 steps), at most 250 frames."""
+    """GIF's settings for `env_id`: every 4th frame of a 1000-step episode at half size; every
+    frame of a short one (Reacher's 50 steps) at full size, where the arm is small; at most 250
+    frames."""
     steps = gym.spec(env_id).max_episode_steps or 1000
-    return dict(GIF, every=max(1, min(4, steps // GIF["max_frames"])))
+    every = max(1, min(4, steps // GIF["max_frames"]))
+    return dict(GIF, every=every, scale=GIF["scale"] if every > 1 else 1)
 
 
 class MujocoEnvState:
