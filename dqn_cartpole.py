@@ -238,8 +238,12 @@ def pictures(cfg):
     """curve.png: epsilon and the loss; inside.png: Q against the return, and the two targets."""
     what = "Double DQN" if cfg.double else "DQN"
     return dict(curve=[[plots.lines("epsilon", right=("loss",))]], inside=[[
-        plots.lines("q_greedy", "mc_return", title=f"{what}: the greedy policy's states"),
-        plots.lines("next_max", "next_double", title="the value of s' in the target, batch mean")]])
+        plots.lines("q_greedy", "mc_return", title=f"{what}: the greedy policy's states",
+                    ylabel="discounted return from s, mean over the states"),
+        plots.lines("next_max", "next_double", dashed=("next_double",),
+                    ylabel="value of s', mean over the minibatches",
+                    title="the value of s' in the target; dashed over solid: equal where the "
+                          "picks agree")]])
 
 
 # ==== Training ============================================================================

@@ -456,21 +456,29 @@ def train(cfg: Config):
 
 
 def pictures(cfg, sft_steps, samples):
-    """curve.png: each phase on its own steps; inside.png: the per-token ratio at three GRPO
-    updates against the clip band, and held-out sums' answers before and after (x: wrong)."""
+    """curve.png: each phase on its own steps, a quantity per axis; inside.png: the per-token
+    ratio at three GRPO updates against the clip band, and held-out sums' answers before and
+    after, side by side (x: wrong)."""
     second = "RFT" if cfg.rft else "more labels" if cfg.more_labels else "GRPO"
     first = dict(within=(1, sft_steps), xlabel="step")  # progress.csv's rows of each phase
     then = dict(within=(sft_steps + 1, np.inf), xlabel="step")
     baseline = cfg.rft or cfg.more_labels  # its loss is a cross-entropy; it keeps no ratio
     ratios = [] if baseline else [[plots.histograms("ratio", band=(1 - cfg.clip_coef,
-                                                                   1 + cfg.clip_coef))]]
-    answers = [[plots.text(lines, f"{len(lines)} held-out sums, {cfg.group_size} sampled answers "
-                           f"each (x: wrong), {when} {second}")] for when, lines in samples.items()]
-    return dict(curve=[[plots.lines("pass1", title="supervised", **first),
-                        plots.lines("pass1", "reward", title=second, **then)],
-                       [plots.lines("loss", title="cross-entropy", **first),
-                        plots.lines(*(["loss"] if baseline else []), "kl", "flat_groups",
-                                    **then)]],
+                                                                   1 + cfg.clip_coef),
+                                                    ylabel="answer tokens")]]
+    answers = [[plots.text(lines, f"{when} {second}: {len(lines)} held-out sums, "
+                           f"{cfg.group_size} sampled answers each (x: wrong)")
+                for when, lines in samples.items()]]
+    right = "share of the answers right"
+    cross_entropy = "cross-entropy (nats per answer token)"
+    moved = plots.lines("kl", right=("flat_groups",), right_log=False, title=f"{second}: how "
+                        "far from pi_ref, and the groups without signal", **then)
+    return dict(curve=[[plots.lines("pass1", title="supervised", ylabel=right, **first),
+                        plots.lines("pass1", "reward", title=second, ylabel=right, **then)],
+                       [plots.lines("loss", title="supervised", ylabel=cross_entropy, **first),
+                        *([moved] if not cfg.more_labels else []),
+                        *([plots.lines("loss", title=f"{second}: its supervised steps",
+                                       ylabel=cross_entropy, **then)] if baseline else [])]],
                 inside=ratios + answers)
 
 

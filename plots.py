@@ -58,16 +58,18 @@ def pyplot():
 # A picture is rows of panels. A panel is (n, draw): it takes n axes side by side in its row
 # and draw(axes, logs) fills them from `logs`, the run's tables read from its CSVs
 # ("progress", "evaluations", "episodes": {column: array}), "kept" (per update: (env step,
-# {name: array})) and "labels" ({column: what it is}, from the script's declaration of what
-# it logs). The scripts choose their panels from the builders below; none of them knows a
+# {name: array})), "labels" ({column: what it is}, from the script's declaration of what
+# it logs) and "warm_up" (the env steps of random actions before learning starts, shaded;
+# 0: none). The scripts choose their panels from the builders below; none of them knows a
 # script. A few hold what they show, handed over when the script declares them (maps_row's
-# maps, distributions' arrays, text's lines). Every axis of a row has the same width.
+# maps, distributions' arrays, text's lines). Every axis of a row has the same width, and
+# every axis says on its y label what it measures: one quantity per axis.
 
 
-def load_logs(run_dir, kept=(), labels=None):
+def load_logs(run_dir, kept=(), labels=None, warm_up=0):
     """The `logs` of a run folder's pictures (see above)."""
     run_dir = Path(run_dir)
-    logs = dict(kept=list(kept), labels=dict(labels or {}))
+    logs = dict(kept=list(kept), labels=dict(labels or {}), warm_up=warm_up)
     for name in ("progress", "evaluations", "episodes"):
         if (run_dir / f"{name}.csv").exists():  # episodes.csv: absent before the first ends
             logs[name] = read_csv(run_dir / f"{name}.csv")
@@ -75,26 +77,42 @@ def load_logs(run_dir, kept=(), labels=None):
     return logs
 
 
-def draw(run_dir, name, rows, logs, width=12, row_height=3.3, heights=None, dpi=72,
-         wspace=0.7):
-    """Write run_dir/<name> from `rows` of panels; returns its path. `wspace`: the space
-    between two axes of a row, as a share of an axis' width."""
-    run_dir, plt = Path(run_dir), pyplot()
+def figure(rows, logs, title, width=12, row_height=3.3, heights=None, gap=1.0):
+    """The figure of `rows` of panels, filled from `logs`, `title` on top: `width` inches
+    wide, or wider where a row's axes would be narrower than 1.8 inches. `gap`: inches
+    between two axes of a row, room for the tick labels and y label of the one on the right;
+    0.7 more in a row with a right-hand axis (a panel whose fill has right_axis true)."""
+    plt = pyplot()
+    left, right, narrowest = 1.0, 1.0, 1.8  # inches: the margins, the narrowest axis
+    # per row: its axes, and the inches between two of them
+    shape = [(sum(k for k, _ in row),
+              gap + 0.7 * any(getattr(fill, "right_axis", False) for _, fill in row))
+             for row in rows]
+    width = max([width] + [left + right + n * narrowest + (n - 1) * space for n, space in shape])
     heights = heights or [row_height] * len(rows)
     total = sum(heights) + 0.5  # inches; half an inch for the title
     fig = plt.figure(figsize=(width, total))
     # margins in inches, room for the outer labels (a right-hand axis' too), so that the
     # picture is saved as laid out, without a second drawing to fit it (bbox_inches="tight")
-    grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=0.85 / width,
-                            right=1 - 0.8 / width, top=1 - 0.55 / total, bottom=0.5 / total)
-    for cell, row in zip(grid, rows):
-        sub = cell.subgridspec(1, sum(n for n, _ in row), wspace=wspace)
+    grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=left / width,
+                            right=1 - right / width, top=1 - 0.55 / total, bottom=0.5 / total)
+    for cell, row, (n, space) in zip(grid, rows, shape):
+        axis = (width - left - right - (n - 1) * space) / n  # inches, each axis of the row
+        sub = cell.subgridspec(1, n, wspace=space / axis)  # wspace: a share of an axis' width
         at = 0
-        for n, fill in row:
-            fill([fig.add_subplot(sub[0, at + i]) for i in range(n)], logs)
-            at += n
-    fig.suptitle(run_dir.name, fontsize=8, y=1 - 0.12 / total)
-    return save_whole(plt, fig, run_dir / name, dpi=dpi, tight=False)
+        for k, fill in row:
+            fill([fig.add_subplot(sub[0, at + i]) for i in range(k)], logs)
+            at += k
+    fig.suptitle(title, fontsize=8, y=1 - 0.12 / total)
+    return fig
+
+
+def draw(run_dir, name, rows, logs, dpi=72, **layout):
+    """Write run_dir/<name>, the figure of `rows` (figure(); `layout`: its width, row_height,
+    heights, gap); returns its path."""
+    run_dir = Path(run_dir)
+    fig = figure(rows, logs, run_dir.name, **layout)
+    return save_whole(pyplot(), fig, run_dir / name, dpi=dpi, tight=False)
 
 
 def save_whole(plt, fig, path, dpi, tight=True):
@@ -131,30 +149,65 @@ def episode_returns(window, solved_return=None, solved_step=None):
 
 
 def evaluation_returns():
-    """Panel: the evaluations' mean return +- std, and the training return before each."""
+    """Panel: the evaluations' mean return +- std, and the training return before each; an
+    evaluation in the random warm-up is a point of its own, on the shaded warm-up."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["evaluations"], logs["labels"]
         x, mean, std = table["global_step"], table["eval_mean"], table["eval_std"]
-        ax.plot(x, mean, color="C0", lw=2, label=labels.get("eval_mean", "eval_mean"))
-        ax.fill_between(x, mean - std, mean + std, color="C0", alpha=0.2, label="+- std")
-        ax.plot(x, table["train_return_mean10"], color="C1", lw=1,
-                label=labels.get("train_return_mean10", "train_return_mean10"))
+        warm = warm_up_shaded(ax, x, logs.get("warm_up", 0))
+        series(ax, x, mean, warm, color="C0", lw=2, label=labels.get("eval_mean", "eval_mean"))
+        ax.fill_between(x[~warm], (mean - std)[~warm], (mean + std)[~warm], color="C0",
+                        alpha=0.2, label="+- std")
+        if warm.any():
+            ax.errorbar(x[warm], mean[warm], std[warm], fmt="none", color="C0", capsize=3)
+        series(ax, x, table["train_return_mean10"], warm, color="C1", lw=1,
+               label=labels.get("train_return_mean10", "train_return_mean10"))
         ax.set(xlabel="env steps", ylabel="return")
         ax.legend(loc="upper left", fontsize=8)
     return 1, fill
 
 
-def lines(*columns, title=None, right=(), log=False, ylim=None, between=None, hlines=(),
-          steps=False, within=None, where=None, x="global_step", x_of=None, xlabel="env steps"):
-    """Panel: `columns` of the run's table over env steps, labelled as declared; `right`:
-    more columns on a log-scaled right axis; `between`: (low, high, label) shaded; `hlines`:
-    dashed levels; `steps`: drawn as steps, each rise and fall marked. A column measured only
-    at some rows (None elsewhere) is drawn at those rows, as points; one with no value in the
-    rows drawn is left out. A column the log lacks stops the picture with a KeyError naming it.
-    Only some rows, e.g. a stage on its own axis: `within`: (first, last) env step, both
-    drawn; `where`: (column, value), the rows whose column holds value (a stage's name).
-    Against another column: `x`, each row a point, joined in the log's order; `x_of`: a
-    function of that column drawn instead (e.g. its square root); `xlabel`: what x is."""
+def warm_up_shaded(ax, steps, warm_up):
+    """Shade the random warm-up (env steps up to `warm_up`; none if 0) on `ax`; returns which
+    of `steps` lie in it."""
+    if warm_up:
+        ax.axvspan(0, warm_up, color="0.85", zorder=0, label="random warm-up: no learning yet")
+    return np.asarray(steps) <= warm_up if warm_up else np.zeros(len(steps), dtype=bool)
+
+
+def series(ax, x, y, warm, **style):
+    """y over x, drawn in `style`; the points where `warm` (the random warm-up's) as open
+    circles, not joined to the line of the learned ones: a line from them reads as learning."""
+    ax.plot(x[~warm], y[~warm], **style)
+    if warm.any():
+        ax.plot(x[warm], y[warm], "o", ms=5, mfc="none", color=style["color"])
+
+
+def axis_label(columns, labels, given):
+    """An axis' y label: `given`, else the declared label of its one column (several columns:
+    the script names what they share); wrapped to fit beside the axis."""
+    if given is None and len(columns) == 1:
+        given = labels.get(columns[0], columns[0])
+    return textwrap.fill(given, 34) if given else ""
+
+
+def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_log=True,
+          log=False, ylim=None, between=None, hlines=(), steps=False, dashed=(), within=None,
+          where=None, x="global_step", x_of=None, xlabel="env steps"):
+    """Panel: `columns` of the run's table over env steps, labelled as declared; `ylabel`:
+    what they measure (one column: its declared label unless given; several: name the one
+    quantity they share); `right`: a second quantity's columns on a right-hand axis
+    (`right_ylabel`, log-scaled unless `right_log` is False); `between`: (low, high, label)
+    shaded; `hlines`: dashed levels; `steps`: drawn as steps, each rise and fall marked;
+    `dashed`: columns drawn dashed over the others (wide), so that where they coincide both
+    show. A column measured only at some rows (None elsewhere) is drawn at those rows, as
+    points; one with no value in the rows drawn is left out. A column the log lacks stops the
+    picture with a KeyError naming it. The random warm-up (logs["warm_up"]) is shaded, its points
+    not joined to the learned ones. Only some rows, e.g. a stage on its own axis: `within`:
+    (first, last) env step, both drawn; `where`: (column, value), the rows whose column holds
+    value (a stage's name). Against another column: `x`, each row a point, joined in the
+    log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
+    `xlabel`: what x is."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
         needed = (*columns, *right, x, *([where[0]] if where else []))
@@ -168,45 +221,56 @@ def lines(*columns, title=None, right=(), log=False, ylim=None, between=None, hl
         if where is not None:
             rows &= table[where[0]] == where[1]
         xs = (x_of(table[x]) if x_of else table[x])[rows]
+        warm = (warm_up_shaded(ax, xs, logs.get("warm_up", 0)) if x == "global_step"
+                else np.zeros(len(xs), dtype=bool))
         if between is not None:
             ax.axhspan(between[0], between[1], color="C2", alpha=0.2, label=between[2])
-        for i, column in enumerate(columns):
-            y = table[column][rows]
-            at = np.isfinite(y)
-            if not at.any():  # not measured in these rows (another stage's number)
-                continue
-            sparse = (at.sum() < len(at) or x != "global_step") and not steps
-            ax.plot(xs[at] if sparse else xs, y[at] if sparse else y, "o-" if sparse else "-",
-                    ms=3, color=f"C{i + 1}", lw=1, label=labels.get(column, column),
-                    drawstyle="steps-post" if steps else None)
-            if steps:  # the value the next row has: up or down from here
-                nxt = np.append(y[1:], np.nan)
-                for changed, marker, what in ((nxt > y, "^", "rises next"),
-                                              (nxt < y, "v", "falls next")):
-                    ax.scatter(xs[changed], y[changed], marker=marker, s=18, label=what)
+
+        def draw_columns(ax, names, colors):
+            for column, color in zip(names, colors):
+                y = table[column][rows]
+                at = np.isfinite(y)
+                if not at.any():  # not measured in these rows (another stage's number)
+                    continue
+                sparse = (at.sum() < len(at) or x != "global_step") and not steps
+                on_top = column in dashed  # the others wide beneath it, to show at its gaps
+                style = dict(color=color, label=labels.get(column, column), ms=3,
+                             marker="o" if sparse else None, ls="--" if on_top else "-",
+                             lw=1 if on_top or not dashed else 3, zorder=3 if on_top else 2,
+                             drawstyle="steps-post" if steps else "default")
+                series(ax, xs[at], y[at], warm[at], **style)
+                if steps:  # the value the next row has: up or down from here
+                    nxt = np.append(y[1:], np.nan)
+                    for changed, marker, what in ((nxt > y, "^", "rises next"),
+                                                  (nxt < y, "v", "falls next")):
+                        ax.scatter(xs[changed], y[changed], marker=marker, s=18, label=what)
+
+        draw_columns(ax, columns, [f"C{i + 1}" for i in range(len(columns))])
         for level in hlines:
             ax.axhline(level, color="k", ls="--", lw=0.8)
         ax.set(yscale="log" if log else "linear", xlabel=xlabel)
+        ax.set_ylabel(axis_label(columns, labels, ylabel), fontsize=8)
         if ylim is not None:
             ax.set_ylim(*ylim)
         if title:
             ax.set_title(title, fontsize=9)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=7, loc="upper left")
-        shown = list(right)
-        if shown:
-            twin = ax.twinx()
-            for column, color in zip(shown, ("C3", "C4", "C5")):
-                twin.plot(xs, table[column][rows], color=color, lw=1,
-                          label=labels.get(column, column))
-            twin.set_yscale("log")
-            twin.legend(loc="upper right", fontsize=8)
+        top = ax
+        if right:  # its own axis, its own colours: one legend says which line is which
+            top = ax.twinx()
+            draw_columns(top, right, [f"C{i + len(columns) + 1}" for i in range(len(right))])
+            top.set_yscale("log" if right_log else "linear")
+            top.set_ylabel(axis_label(right, labels, right_ylabel), fontsize=8)
+        handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
+        if handles:  # on the axis drawn last, above every line
+            top.legend(handles=handles, fontsize=7, loc="upper left")
+    fill.right_axis = bool(right)  # figure() leaves room for its labels
     return 1, fill
 
 
-def spread(prefix, title, hlines=()):
+def spread(prefix, title, hlines=(), ylabel=None):
     """Panel: a batch's distribution of a number after each update, from the columns
-    <prefix>_min, _q05, _median, _q95, _max (common.ratio_stats): bands and the median."""
+    <prefix>_min, _q05, _median, _q95, _max (common.ratio_stats): bands and the median;
+    `ylabel`: what the number is (its prefix if not given)."""
     def fill(axes, logs):
         ax, table = axes[0], logs["table"]
         x = table["global_step"]
@@ -219,6 +283,7 @@ def spread(prefix, title, hlines=()):
             ax.axhline(y, color="k", ls="--", lw=0.8)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel("env steps")
+        ax.set_ylabel(ylabel or prefix, fontsize=8)
         ax.legend(fontsize=7, loc="upper right")
     return 1, fill
 
@@ -241,12 +306,13 @@ def three_updates(kept):
     return [(i + 1, *kept[i]) for i in picks]
 
 
-def histograms(array, by_sign_of=None, band=None):
+def histograms(array, by_sign_of=None, band=None, ylabel="samples in the batch"):
     """Panels (3): the kept `array` at an early, a middle and a late update of those that keep
     it (update k: the k-th of them; kept_with), split by the sign of the kept `by_sign_of` if
     given;
     `band`: (low, high) dashed, and, split by sign, shaded outside where a sample of that sign
-    gets no gradient (the clip binds: above high for +, below low for -)."""
+    gets no gradient (the clip binds: above high for +, below low for -); `ylabel`: what
+    one count is."""
     def fill(axes, logs):
         lo, hi = band if band is not None else (np.inf, -np.inf)
         kept = kept_with(logs, array)
@@ -268,13 +334,15 @@ def histograms(array, by_sign_of=None, band=None):
             ax.set_title(f"{array} at update {update} (step {step})", fontsize=8)
             ax.set_xlabel(f"{array}; shaded: no gradient for that colour" if by_sign_of and band
                           else array, fontsize=7)
+            ax.set_ylabel(ylabel, fontsize=7)
         if axes and kept and by_sign_of is not None:
             axes[0].legend(fontsize=7)
     return 3, fill
 
 
-def distributions(arrays, title, xlabel):
-    """Panel: histograms of `arrays` ({label: numbers}), over the same bins, one on another."""
+def distributions(arrays, title, xlabel, ylabel="count"):
+    """Panel: histograms of `arrays` ({label: numbers}), over the same bins, one on another;
+    `ylabel`: what one count is."""
     def fill(axes, logs):
         ax, values = axes[0], [np.asarray(a, dtype=float) for a in arrays.values()]
         bins = np.histogram_bin_edges(np.concatenate(values), bins=40)
@@ -282,17 +350,25 @@ def distributions(arrays, title, xlabel):
             ax.hist(a, bins=bins, color=f"C{i}", alpha=0.6, label=label)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel, fontsize=8)
         ax.legend(fontsize=7)
     return 1, fill
 
 
-def text(lines, title, fontsize=8):
-    """Panel: `lines` of text (e.g. sampled answers), top-down in a fixed-width font, no axes."""
+def text(lines, title, largest=12):
+    """Panel: `lines` of text (e.g. sampled answers), top-down in a fixed-width font, no axes,
+    as large as the panel holds them (at most `largest` points)."""
     def fill(axes, logs):
         ax = axes[0]
         ax.axis("off")
         ax.set_title(title, fontsize=9)
-        ax.text(0, 1, "\n".join(lines), va="top", family="monospace", fontsize=fontsize,
+        box = ax.get_position()  # a share of the figure: its size in points
+        wide, high = (72 * box.width * ax.figure.get_figwidth(),
+                      72 * box.height * ax.figure.get_figheight())
+        chars = max((len(line) for line in lines), default=1)
+        # a monospace character is about 0.6 of the font size wide; a line 1.2 of it high
+        size = min(largest, wide / (0.6 * chars), high / (1.2 * max(len(lines), 1)))
+        ax.text(0, 1, "\n".join(lines), va="top", family="monospace", fontsize=size,
                 transform=ax.transAxes)
     return 1, fill
 

@@ -402,14 +402,16 @@ def pictures(cfg):
     band = (1 - cfg.clip_ratio, 1 + cfg.clip_ratio)
     limits = () if cfg.target_kl is None else (cfg.target_kl, cfg.kl_stop_factor * cfg.target_kl)
     return dict(inside=[
-        [plots.lines("std_min", "std_max", title="exploration: sigma of pi"),
-         plots.lines("distance", title="reaching: distance at the end (Reacher)"),
-         plots.lines("pi_steps", title="policy steps on the last batch",
+        [plots.lines("std_min", "std_max", title="exploration: sigma of pi", ylabel="sigma"),
+         plots.lines("distance", title="reaching: distance at the end (Reacher)",
+                     ylabel="fingertip to target"),
+         plots.lines("pi_steps", title="policy steps on the last batch", ylabel="policy steps",
                      ylim=(0, 1.05 * max(cfg.train_pi_iters, 10)))],
-        [plots.spread("ratio", "r = pi/pi_old after the last update; dashed: 1 -+ eps", band),
-         plots.lines("approx_kl", title="approx_kl after the last update; dashed: target_kl"
-                     " and 1.5 x it", hlines=limits),
-         plots.lines("clipfrac", title="clipfrac after the last update")]])
+        [plots.spread("ratio", "r after the last update; dashed: 1 -+ eps", band,
+                      ylabel="r = pi / pi_old"),
+         plots.lines("approx_kl", title="after the last update; dashed: target_kl, 1.5 x it",
+                     hlines=limits, ylabel="approx_kl"),
+         plots.lines("clipfrac", title="after the last update", ylabel="clipfrac")]])
 
 
 SMOKE = dict(total_timesteps=600, num_steps=100, eval_every=200, eval_episodes=1,

@@ -229,6 +229,7 @@ def grid(maps, blank):
             rows, cols = np.unravel_index([s for s, _ in path], (4, 12))
             ax.plot(cols, rows, "-", cols[:1], rows[:1], "o", color="C3")
             ax.set(title=title, xticks=[], yticks=[], facecolor="0.8")
+            ax.set_ylabel("4 rows", fontsize=8)  # the bottom one: start, cliff, goal
         axes[-1].figure.colorbar(shown, ax=axes, fraction=0.02, label="V(s) = max_a Q(s, a)")
     return len(maps), fill
 
@@ -241,12 +242,15 @@ def pictures(tables, v_star, paths, optimal, start):
     best, x = (v_star[start],), dict(xlabel="episode")  # the optimal return, dashed
     return dict(curve=[[plots.lines("sarsa_recent", "q_learning_recent", ylim=(-100, 0), **x,
                                     hlines=best, title="online return, mean of the last "
-                                    "--window episodes; dashed: V*(start)")]],
+                                    "--window episodes; dashed: V*(start)",
+                                    ylabel="online return, recent mean")]],
                 inside=[[grid([*maps, ("V* and the optimal path", v_star, optimal)], blank)],
                         [plots.lines("sarsa_q_error", "q_learning_q_error", **x,
-                                     title="|Q - Q*| on the optimal path's (s, a*)"),
+                                     title="|Q - Q*| on the optimal path's (s, a*)",
+                                     ylabel="mean |Q - Q*|"),
                          plots.lines("sarsa_greedy", "q_learning_greedy", hlines=best, **x,
-                                     ylim=(-40, -10), title="greedy path's return")]])  # 37 cells
+                                     ylim=(-40, -10), title="greedy path's return",
+                                     ylabel="return of the greedy path")]])  # 37 cells
 
 
 # ==== Training ============================================================================

@@ -47,13 +47,14 @@ def draw_pictures(run, pictures, top=None, maps=None):
     """curve.png (the panel `top`, then pictures["curve"]'s rows; without a `top`, its rows
     alone, each as high as inside.png's) and inside.png (pictures["inside"]'s rows, then
     `maps`' row if there are maps, kept in maps.npz too). Returns the two paths."""
-    logs = plots.load_logs(run.dir, getattr(run, "kept", ()), run.labels)
+    logs = plots.load_logs(run.dir, getattr(run, "kept", ()), run.labels,
+                           getattr(run, "learning_starts", 0))  # its random warm-up, shaded
     rows = pictures.get("curve", [])
     if top is not None:  # the returns on top, the rows under it lower
         curve = plots.draw(run.dir, "curve.png", [[top], *rows], logs, width=7,
                            heights=[3.2] + [1.6] * len(rows), dpi=90)
-    else:  # the rows alone, their axes closer side by side (also inside.png's)
-        curve = plots.draw(run.dir, "curve.png", rows, logs, width=10, wspace=0.3, dpi=90)
+    else:  # the rows alone
+        curve = plots.draw(run.dir, "curve.png", rows, logs, width=10, dpi=90)
     rows = list(pictures.get("inside", []))
     if maps is not None:
         rows.append([plots.maps_row(maps)])
@@ -62,8 +63,7 @@ def draw_pictures(run, pictures, top=None, maps=None):
                            for key in ("value", "policy")}, true_value=maps["true"]["value"],
                      **{k: maps[k] for k in ("x", "y", "xlabel", "ylabel", "value_label",
                                              "policy_label", "true_x", "true_y", "visited")})
-    inside = (plots.draw(run.dir, "inside.png", rows, logs, wspace=0.7 if top else 0.3)
-              if rows else None)
+    inside = plots.draw(run.dir, "inside.png", rows, logs) if rows else None
     return curve, inside
 
 

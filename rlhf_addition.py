@@ -415,16 +415,29 @@ def train(cfg: Config):
 
 
 def pictures(margins):
-    """curve.png: each stage over its steps; inside.png: r's margins on held-out pairs (r is
-    known up to a shift per prompt: only r(x, y_w) - r(x, y_l) means something), PPO's over KL."""
-    numbers = ("loss", "rm_score", "true_score", "kl", "held_true", "held_accuracy")
-    checked = f" (held-out: {CHECK_PROMPTS} prompts; the line after the stage: all)"
-    stages = [plots.lines(*numbers, title=name + checked * (name != "rm"), where=("phase", name),
-                          xlabel="step") for name in ("sft", "rm", "ppo", "dpo")]
-    return dict(curve=[stages[:2], stages[2:]], inside=[[
+    """curve.png: a column per stage over its steps (its loss; its held-out checks), then PPO's
+    batch (the learned reward against the true score) and its KL; inside.png: r's margins on
+    held-out pairs (r is known up to a shift per prompt: only r(x, y_w) - r(x, y_l) means
+    something), PPO's answers over their KL."""
+    losses = dict(sft="cross-entropy", rm="Bradley-Terry loss", ppo="PPO's clipped loss",
+                  dpo="DPO's loss")
+    stage = dict(xlabel="step")
+    return dict(curve=[
+        [plots.lines("loss", title=name, ylabel=what, where=("phase", name), **stage)
+         for name, what in losses.items()],
+        [plots.lines("rm_accuracy", title="rm: held-out pairs", where=("phase", name), **stage)
+         if name == "rm" else plots.lines("held_true", right=("held_accuracy",), right_log=False,
+                                          title=f"{name}: held-out checks",
+                                          where=("phase", name), **stage)
+         for name in losses],
+        [plots.lines("true_score", right=("rm_score",), right_log=False, where=("phase", "ppo"),
+                     title="ppo: the batch's answers, scored by the judge and by r", **stage),
+         plots.lines("kl", where=("phase", "ppo"), title="ppo: how far from the supervised model",
+                     **stage)]], inside=[[
         plots.distributions({"r(x, y_w) - r(x, y_l)": margins.numpy()}, "reward model on "
                             "held-out pairs: right of 0, ranked right", "margin"),
-        plots.lines("rm_score", "true_score", where=("phase", "ppo"), x="kl",
+        plots.lines("true_score", right=("rm_score",), right_log=False, where=("phase", "ppo"),
+                    x="kl",
                     x_of=lambda kl: np.sqrt(np.maximum(kl, 0)),
                     title="PPO's answers against their KL to the supervised model",
                     xlabel="sqrt(KL(pi || pi_ref)), per answer")]])

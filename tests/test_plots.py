@@ -1,5 +1,6 @@
 """The pictures and logs a user looks at: curve.png, TensorBoard scalars, runs compared."""
 
+import importlib
 import subprocess
 import sys
 
@@ -11,6 +12,7 @@ import torch
 import cartpole_env
 import ppo_cartpole as ppo
 from conftest import ROOT, run_main
+from fingerprints import SCRIPTS, quick_smoke
 from test_cartpole_scripts import assert_curve_drawn
 
 
@@ -435,3 +437,117 @@ def test_plots_takes_runs_latest_as_the_run_it_names(tmp_path, capsys):
                                                      "while all ran")):
         (ax,) = plots.compare_figure(runs).axes
         assert [t.get_text() for t in ax.get_legend().get_texts()] == [label]
+
+
+def axes_without_a_ylabel(fig):
+    """The axes of `fig` that show a y axis and say nothing on it, by title (colour bars and
+    text panels, which have no y axis to read, aside)."""
+    return [ax.get_title() or "(a right-hand axis, or one without a title)" for ax in fig.axes
+            if ax.axison and ax.get_label() != "<colorbar>" and not ax.get_ylabel().strip()]
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_every_axis_of_a_smoke_runs_pictures_says_what_it_measures(name, tmp_path, monkeypatch):
+    """Every axis of every curve.png and inside.png the script's SMOKE run draws (a walker's
+    at each evaluation too) has a y label: a reader knows what it measures without the
+    legend. A panel of several columns gets one only where the script names the one quantity
+    they share: two quantities on one axis have none, and fail here."""
+    import plots
+
+    figures, make = [], plots.figure
+
+    def kept(rows, logs, title, **layout):
+        figures.append(make(rows, logs, title, **layout))
+        return figures[-1]
+    monkeypatch.setattr(plots, "figure", kept)
+    module = importlib.import_module(name)
+    module.train(quick_smoke(module, tmp_path))
+    assert len(figures) >= 2  # curve.png and inside.png, at least once
+    for fig in figures:
+        assert not axes_without_a_ylabel(fig), (fig.get_suptitle(), axes_without_a_ylabel(fig))
+
+
+@pytest.mark.quick
+def test_lines_says_on_its_y_axis_what_the_columns_measure():
+    """One column: its declared label; several: the quantity the script names, or nothing
+    (the smoke runs' test then fails); a right-hand axis: its own, linear if asked."""
+    import plots
+
+    (ax,) = drawn(plots.lines("loss"), stage_logs())
+    assert ax.get_ylabel() == "the loss"
+    (ax,) = drawn(plots.lines("loss", "score"), stage_logs())
+    assert ax.get_ylabel() == ""  # two labels, no quantity named
+    (ax,) = drawn(plots.lines("loss", "score", ylabel="nats"), stage_logs())
+    assert ax.get_ylabel() == "nats"
+    fig = drawn(plots.lines("loss", right=("score",), right_log=False), stage_logs())[0].figure
+    main, twin = fig.axes
+    assert (main.get_ylabel(), twin.get_ylabel()) == ("the loss", "the score")
+    assert twin.get_yscale() == "linear" and not axes_without_a_ylabel(fig)
+    texts = [t.get_text() for t in twin.get_legend().get_texts()]
+    assert texts == ["the loss", "the score"]  # one legend for both axes, above their lines
+
+
+def warm_up_logs():
+    """Evaluations at steps 100 and 200, in a random warm-up of 250 steps, then 300 to 500."""
+    steps = np.array([100, 200, 300, 400, 500.0])
+    table = dict(global_step=steps, eval_mean=np.array([9, 8, 1, 5, 20.0]),
+                 eval_std=np.ones(5), train_return_mean10=np.array([7, 7, 2, 4, 15.0]),
+                 q_estimate=np.array([0, 0.1, 1, 2, 3.0]))
+    return dict(table=table, evaluations=table, kept=[], labels={}, warm_up=250)
+
+
+@pytest.mark.quick
+@pytest.mark.parametrize("panel", ["evaluation_returns", "lines"])
+def test_no_line_joins_the_random_warm_up_to_the_learned_evaluations(panel):
+    """The warm-up (steps up to 250) shaded; its evaluations are points of their own: no
+    line goes from one of them to a learned one, which would read as learning."""
+    import plots
+
+    builder = plots.evaluation_returns() if panel == "evaluation_returns" else plots.lines(
+        "q_estimate")
+    (ax,) = drawn(builder, warm_up_logs())
+    spans = [p.get_extents() for p in ax.patches]  # the shaded warm-up, in pixels
+    left, right = ax.transData.transform([(0, 0), (250, 0)])[:, 0]
+    assert any(abs(s.x0 - left) < 1 and abs(s.x1 - right) < 1 for s in spans)
+    for line in ax.lines:
+        x = np.asarray(line.get_xdata(), dtype=float)
+        assert not ((x <= 250).any() and (x > 250).any()), x
+        if (x <= 250).any():
+            assert line.get_linestyle() == "None"  # points (and error bars), no line
+    assert any(list(line.get_xdata()) == [100, 200] and line.get_marker() == "o"
+               for line in ax.lines)  # the warm-up's evaluations: shown, as open points
+    (ax,) = drawn(builder, {**warm_up_logs(), "warm_up": 0})  # no warm-up: one line each
+    assert not ax.patches or panel == "evaluation_returns"  # (its +- std band)
+    assert all(len(line.get_xdata()) == 5 for line in ax.lines)
+
+
+@pytest.mark.quick
+def test_dashed_columns_lie_over_the_others_and_both_show_where_they_coincide():
+    """DQN's two targets, equal where the online argmax and the target's agree: the dashed
+    one drawn over the other, which is wider, so that its colour shows in the dashes' gaps."""
+    import plots
+
+    (ax,) = drawn(plots.lines("loss", "kl", dashed=("kl",), ylabel="x"), stage_logs())
+    solid, dashed = ax.lines
+    assert dashed.get_linestyle() == "--" and solid.get_linestyle() == "-"
+    assert dashed.get_zorder() > solid.get_zorder()
+    assert solid.get_linewidth() > dashed.get_linewidth()
+
+
+@pytest.mark.quick
+def test_text_is_as_large_as_its_panel_holds():
+    """GRPO's answers: 8 lines of 8 answers of 2-digit sums, two panels side by side in
+    inside.png's 12 inches: the text within its panel, at 9.5 points or more."""
+    import plots
+
+    lines = ["12+34= " + " ".join(["046.x"] * 8)] * 8
+    fig = plots.figure([[plots.text(lines, "before"), plots.text(lines, "after")]],
+                       dict(kept=[], labels={}), "answers")
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        (text,) = ax.texts
+        box, inside = text.get_window_extent(renderer), ax.get_window_extent(renderer)
+        assert text.get_fontsize() >= 9.5
+        assert inside.x0 - 1 <= box.x0 and box.x1 <= inside.x1 + 1, (box, inside)
+        assert inside.y0 - 1 <= box.y0 and box.y1 <= inside.y1 + 1, (box, inside)
