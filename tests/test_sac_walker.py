@@ -165,7 +165,8 @@ def test_the_diff_from_td3_is_what_sac_changes_and_little_else():
     removed = [d for d in diff if d.startswith("-") and not d.startswith("---")]
     added = [d for d in diff if d.startswith("+") and not d.startswith("+++")]
     assert len(removed) <= 140 and len(added) <= 200, (len(removed), len(added))
-    assert len(sac_lines) <= 419, f"sac_walker.py has {len(sac_lines)} lines, over its 419"
+    # 419 before its inside.png's panels said on their y labels what they measure (2 lines)
+    assert len(sac_lines) <= 421, f"sac_walker.py has {len(sac_lines)} lines, over its 421"
 
 
 def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
@@ -195,18 +196,19 @@ def test_ctrl_c_then_resume_is_the_unbroken_run(tmp_path):
 
 def test_eval_replays_the_saved_actor_and_inside_png_has_the_entropy(tmp_path, capsys):
     """--eval of model.pt plays tanh(mean) without sampling: the last evaluation's returns;
-    evaluations.csv has SAC's entropy, its target and alpha, which inside.png draws."""
+    evaluations.csv has SAC's entropy, its target and alpha, which inside.png draws (three
+    evaluations after the warm-up's: lines, not points)."""
     import csv
 
     from test_cartpole_scripts import assert_curve_drawn
 
-    result = sac.train(sac.Config(env_id="InvertedPendulum-v5", total_timesteps=400,
+    result = sac.train(sac.Config(env_id="InvertedPendulum-v5", total_timesteps=800,
                                   start_steps=200, eval_every=200, eval_episodes=2,
                                   batch_size=64, hidden=32, print_every=10**6, gifs=False,
                                   run_dir=str(tmp_path)))
     run = result["run_dir"]
-    assert play(run / "model.pt", 2, script=sac) == pytest.approx(
-        [result["evaluations"][-1]["eval_mean"]] * 2)
+    assert np.mean(play(run / "model.pt", 2, script=sac)) == pytest.approx(
+        result["evaluations"][-1]["eval_mean"])  # the same episodes (eval seed) and actor
     row = list(csv.DictReader(open(run / "evaluations.csv")))[-1]
     assert float(row["target_entropy"]) == -1 and 0 < float(row["alpha"]) < 1
     assert np.isfinite(float(row["entropy"]))
