@@ -16,7 +16,7 @@ bootstrap rule above common.discounted_returns); buf.get -> batch_of. The loop i
     evaluate after the update that reaches each eval_every steps: eval_episodes episodes
              of the mean action mu(s), clipped to the box
 
-    python ppo_reacher.py                       # 1M steps: about 10 minutes on a CPU
+    python ppo_reacher.py                       # 1M steps: ~25 minutes on a busy 2-core CPU
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
 Where this differs from tutorial 002 (docs/why.md): observations are normalised (--norm-obs,
