@@ -25,7 +25,8 @@ EPILOG = f"{LANG_HINT}\n\n{HINT}"  # what --help ends with
 
 def wanted(argv):
     """(argv with --help-zh read as --help and --lang taken out, whether to add the Chinese
-    lines, whether the output is in Chinese: --lang zh|en, else the locale)."""
+    lines (--help-zh; --help with --lang zh or, without --lang, a Chinese locale), whether the
+    output is in Chinese: --lang zh|en, else the locale)."""
     argv, lang = list(argv), None
     for i, arg in enumerate(argv):
         if arg.startswith("--lang="):
@@ -36,8 +37,8 @@ def wanted(argv):
             break
     if lang not in (None, "zh", "en"):
         argv.append(f"--lang={lang}")  # refused by argparse, as an unknown flag is
-    zh = "--help-zh" in argv or bool({"-h", "--help"} & set(argv) and chinese_locale())
     chinese = lang == "zh" or lang is None and chinese_locale()
+    zh = "--help-zh" in argv or bool({"-h", "--help"} & set(argv) and chinese)  # --lang zh too
     return ["--help" if arg == "--help-zh" else arg for arg in argv], zh, chinese
 
 
