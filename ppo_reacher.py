@@ -139,6 +139,8 @@ class Config(cli.CheckpointFlags):
     """seeds torch and the envs: same seed, same machine => same evaluations.csv on the CPU"""
     total_timesteps: int = 1_000_000
     """env steps to train for (all envs together; the autoreset steps count)"""
+    print_every: int = 4000
+    """print a progress line every this many env steps (4000: one a rollout, after its update)"""
     eval_every: int = 10_000
     """evaluate the mean action (and save model.pt) after the update that reaches each
     multiple of this many env steps"""
