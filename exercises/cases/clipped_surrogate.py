@@ -23,23 +23,25 @@ def loop_hint():
 def cases():
     # pi = (0.5, 0.5) everywhere; pi_old of the taken action 0.25, 0.8 or 0.45, so the ratios
     # r = 2, 0.625, 1.111 are not reciprocal pairs: exp(logp_old - logp) gives other values.
-    policy = Fixed(t([0.0, 0.0]).expand(6, 2), names=logits_names())
-    data = dict(obs=torch.zeros(6, 1), act=torch.tensor([0, 0, 1, 1, 0, 1]),
-                adv=t(1.0, -1.0, 1.0, -1.0, 2.0, -3.0),
-                logp=torch.log(t(0.25, 0.25, 0.8, 0.8, 0.45, 0.45)))
+    policy = Fixed(t([0.0, 0.0]).expand(7, 2), names=logits_names())
+    data = dict(obs=torch.zeros(7, 1), act=torch.tensor([0, 0, 1, 1, 0, 1, 1]),
+                adv=t(1.0, -1.0, 1.0, -1.0, 2.0, -3.0, 2.0),
+                logp=torch.log(t(0.25, 0.25, 0.8, 0.8, 0.45, 0.45, 0.8)))
     # eps = 0.3, not the script's 0.2, so that 0.2 written as a number shows; the band is
     # [0.7, 1.3]. min(r A, clip(r, 0.7, 1.3) A) per sample: min(2, 1.3) = 1.3; min(-2, -1.3) =
     # -2; min(0.625, 0.7) = 0.625; min(-0.625, -0.7) = -0.7; r = 10/9 inside the band: 20/9,
-    # -30/9. Ratios above 1 and below it, against both signs of A. The loss is minus the mean.
-    terms = [1.3, -2.0, 0.625, -0.7, 20 / 9, -30 / 9]
-    return [(tr("r = 2, 2, 0.625, 0.625, 10/9, 10/9 against A = 1, -1, 1, -1, 2, -3; eps = 0.3",
-                "r = 2, 2, 0.625, 0.625, 10/9, 10/9，A = 1, -1, 1, -1, 2, -3；eps = 0.3"),
-             (policy, data, 0.3), (scalar(-sum(terms) / 6), None, None))]
+    # -30/9; and r = 0.625 once more, with A = 2 alone (no pair of opposite signs: min(1.25,
+    # 1.4) = 1.25, where the clipped term alone gives 1.4). Ratios above 1 and below it, against
+    # both signs of A. The loss is minus the mean.
+    terms = [1.3, -2.0, 0.625, -0.7, 20 / 9, -30 / 9, 1.25]
+    return [(tr("r = 2, 2, 0.625, 0.625, 10/9, 10/9, 0.625 against A = 1, -1, 1, -1, 2, -3, 2; "
+                "eps = 0.3", "r = 2, 2, 0.625, 0.625, 10/9, 10/9, 0.625，A = 1, -1, 1, -1, 2, -3, "
+                "2；eps = 0.3"), (policy, data, 0.3), (scalar(-sum(terms) / 7), None, None))]
 
 
 def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,
               renormalized=False, upper_only=False, min_of_clipped_product=False,
-              ratio_min=False):
+              ratio_min=False, clipped_only=False):
     logp = Categorical(logits=policy(data["obs"])).log_prob(data["act"]).detach()
     r = torch.exp(data["logp"] - logp) if inverted else torch.exp(logp - data["logp"])
     a = data["adv"]
@@ -49,6 +51,8 @@ def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=Fal
         return -torch.min(r * a, r.clamp(max=1 + eps) * a).mean()
     if ratio_min:
         return -(torch.min(r, r.clamp(1 - eps, 1 + eps)) * a).mean()
+    if clipped_only:
+        return -(r.clamp(1 - eps, 1 + eps) * a).mean()
     if min_of_clipped_product:
         return -torch.min(r * a, (r * a).clamp(1 - eps, 1 + eps)).mean()
     if clip_product:
@@ -75,6 +79,10 @@ def mistakes(policy, data, eps):
                 "larger ratio", "min 取在比值上，即 min(r, clip(r)) * A，应该取在乘积上，即 "
                 "min(r A, clip(r) A)：\n    A < 0 时，悲观的下界要用较大的那个比值"),
              surrogate(policy, data, eps, ratio_min=True)),
+            (tr("the min left out: the clipped term clip(r, 1 - eps, 1 + eps) A alone, where "
+                "L_CLIP is min(r A, clip(r, 1 - eps, 1 + eps) A)", "漏了 min：只用了裁剪的那一项 "
+                "clip(r, 1 - eps, 1 + eps) A，L_CLIP 应该是 min(r A, clip(r, 1 - eps, 1 + eps) A)"),
+             surrogate(policy, data, eps, clipped_only=True)),
             (tr("the sign: the objective L_CLIP returned, where the loss is -L_CLIP",
                 "符号反了：返回的是目标 L_CLIP，损失应该是 -L_CLIP"), -right),
             (tr("a sum over the batch where the mean belongs", "对批量求了和，应该求均值"),
