@@ -242,15 +242,16 @@ def test_smoke_walker2d_writes_gifs_eval_csv_and_model(tmp_path, monkeypatch):
 
 
 def test_a_short_run_writes_its_files_and_replays_its_last_evaluation(tmp_path):
-    """300 steps on the cheap MuJoCo task, every file written, --eval giving back the last
-    evaluation (the quick layer's DDPG run is test_every_script.py's smoke run)."""
-    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=300,
+    """600 steps on the cheap MuJoCo task, every file written, --eval giving back the last
+    evaluation (the quick layer's DDPG run is test_every_script.py's smoke run); three
+    evaluations after the warm-up's, so that inside.png draws lines, not points."""
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=600,
                               start_steps=200, eval_every=150, eval_episodes=1))
     run = result["run_dir"]
     assert {p.name for p in run.iterdir()} == {"evaluations.csv", "episodes.csv", "model.pt", "best.pt",
                                                "best.gif", "curve.png", "inside.png", "before.gif", "after.gif",
                                                "checkpoint.pt"}
-    assert [e["global_step"] for e in result["evaluations"]] == [150, 300]
+    assert [e["global_step"] for e in result["evaluations"]] == [150, 300, 450, 600]
     from test_cartpole_scripts import assert_curve_drawn
     assert_curve_drawn(run / "inside.png")
     row = list(csv.DictReader(open(run / "evaluations.csv")))[-1]
@@ -292,9 +293,9 @@ def test_curve_is_redrawn_at_every_evaluation(tmp_path, monkeypatch):
             seen.append(path.read_bytes())
         return path
     monkeypatch.setattr(report.plots, "draw", draw)
-    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=900,
+    result = ddpg.train(small(tmp_path, env_id="InvertedPendulum-v5", total_timesteps=1200,
                               start_steps=300, eval_every=300, eval_episodes=1, gifs=False))
-    assert len(seen) == 3 and len(set(seen)) == 3  # one new picture per evaluation
+    assert len(seen) == 4 and len(set(seen)) == 4  # one new picture per evaluation
     assert_curve_drawn(result["run_dir"] / "curve.png")
 
 
