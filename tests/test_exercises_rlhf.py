@@ -37,18 +37,7 @@ def answer(name, body):
     return namespace[check.EXERCISES[name].function]
 
 
-def run(name, fn, learning=False):
-    lines = []
-    passed = check.check(name, fn=fn, learning=learning, say=lines.append)
-    return passed, lines
-
-
-@pytest.fixture(autouse=True)
-def english():
-    """The messages in English whatever the locale (the checker's default follows it)."""
-    checking.LANG = "en"
-    yield
-    checking.LANG = "en"
+from test_exercises import english, run  # noqa: E402,F401  (english: an autouse fixture)
 
 
 REWARDS = """
