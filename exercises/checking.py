@@ -307,6 +307,19 @@ def written_default(chosen):
               + "）：换成别的设置就不起作用了")
 
 
+# Numbers often written for a setting (other libraries' and papers' defaults): one of them in
+# place of an input is named as well as the script's own default
+USUAL_NUMBERS = (0.99, 0.98, 0.95, 0.9, 0.5, 0.25, 0.2, 0.1, 0.05, 0.01, 0.005, 1.0)
+
+
+def written_number(s, value):
+    """The label of the setting `s` written as `value`, a usual number, not its default."""
+    return tr(f"{value!r} written as a number where {s.where} is meant (the script's default "
+              f"is {s.default!r}): any other setting would be ignored",
+              f"把 {s.where} 写成了数字 {value!r}（脚本的默认值是 {s.default!r}）：换成别的设置就不起"
+              f"作用了")
+
+
 def default_mistakes(ex, args):
     """(label, value) of a default written as a number where an input is meant: the script's
     own answer with one or more of the case's settings at their defaults (only those that are
@@ -322,6 +335,17 @@ def default_mistakes(ex, args):
             value = value.detach() if torch.is_tensor(value) else value
             label = written_default(chosen)
             found.append((label, None if same_outputs(value, first(right)) else value))
+    for s in changed:  # one setting written as a usual number, not the script's default
+        for usual in USUAL_NUMBERS:
+            if usual == s.default or not isinstance(s.default, float):
+                continue
+            value = None
+            if usual != s.value:
+                value = first(own(*with_defaults(args, [SimpleNamespace(**{
+                    **vars(s), "default": usual})])))
+                value = value.detach() if torch.is_tensor(value) else value
+                value = None if same_outputs(value, first(right)) else value
+            found.append((written_number(s, usual), value))
     return found
 
 

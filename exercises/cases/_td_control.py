@@ -1,6 +1,8 @@
 """The two tabular TD updates' checks, shared by cases/sarsa_update.py and
 cases/q_learning_update.py: a small Q table, the worked steps and the named mistakes."""
 
+import importlib
+
 import numpy as np
 
 from checking import tr, Failed
@@ -108,7 +110,24 @@ def tabular_mistakes(Q, s, a, r, s_next, a_next, terminated, alpha, gamma, sarsa
             "\n    再更新 Q[s, a]"), (q_new, target - q_new)),
         (tr("the step alpha * delta returned where the TD error delta belongs",
             "返回的是这一步的大小 alpha * delta，应该返回 TD 误差 delta"), (q_new, alpha * delta))]
+    config = importlib.import_module("q_learning_cliffwalking").Config()
+    for name, given, default in (("alpha", alpha, config.alpha), ("gamma", gamma, config.gamma)):
+        for number in sorted({default, 0.5, 0.1} if name == "alpha" else {default, 0.99, 0.9}):
+            if number != given:
+                found.append((written_as_number(name, number, default), tabular_by_hand(
+                    *case, **{"step" if name == "alpha" else "discount": number})))
     return found
+
+
+def written_as_number(name, number, default):
+    """The label of `name` (alpha, gamma) written as the number `number`."""
+    if number == default:
+        return tr(f"{number!r}, the script's default, written as a number where {name} is "
+                  f"meant: any other setting would be ignored",
+                  f"把 {name} 写成了数字 {number!r}（脚本的默认值）：换成别的设置就不起作用了")
+    return tr(f"{number!r} written as a number where {name} is meant (the script's default is "
+              f"{default!r}): any other setting would be ignored",
+              f"把 {name} 写成了数字 {number!r}（脚本的默认值是 {default!r}）：换成别的设置就不起作用了")
 
 
 def check_td_control(fn, sarsa):
@@ -135,6 +154,11 @@ def check_td_control(fn, sarsa):
                             "update moves the pair just left, (s, a)",
                             "更新的是 s' 的那一项（Q[s_next, ...]），应该是 Q[s, a]：要更新的是"
                             "刚离开的那一对 (s, a)")]
+            if others and not named and sorted(others + [(s, a)]) == [
+                    (s, j) for j in range(before.shape[1])]:
+                named = [tr("the whole row Q[s] moved (Q[s] += alpha * delta) where only the "
+                            "pair just taken, Q[s, a], does",
+                            "整行 Q[s] 都动了（Q[s] += alpha * delta），只该更新刚做过的那一对 Q[s, a]")]
             if others:
                 raise Failed(tr(f"entries other than Q[s, a] = Q[{s}, {a}] changed: {others} "
                                 f"(only Q[s, a] moves)", f"除了 Q[s, a] = Q[{s}, {a}] 之外，"

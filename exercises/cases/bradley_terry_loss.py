@@ -6,7 +6,7 @@ import math
 import torch
 from torch.nn.functional import logsigmoid
 
-from checking import scalar, t, tr
+from checking import only_if, scalar, t, tr
 import runs
 
 SCRIPT = "rlhf_addition"
@@ -41,7 +41,12 @@ def cases():
             (tr("2 pairs: r_w = (-2, -0.5), r_l = (-2, -1): gaps 0 (P = 1/2) and +0.5",
                 "2 对：r_w = (-2, -0.5)，r_l = (-2, -1)：分差 0（P = 1/2）和 +0.5"),
              (t(-2.0, -0.5).requires_grad_(), t(-2.0, -1.0).requires_grad_()),
-             by_hand([0.0, 0.5]))]
+             by_hand([0.0, 0.5])),
+            (tr("2 pairs: r_w = (0, 40), r_l = (120, 0): gaps -120 and +40, where sigmoid rounds "
+                "to 0 and to 1 in float32",
+                "2 对：r_w = (0, 40)，r_l = (120, 0)：分差 -120 和 +40，float32 里 sigmoid 会舍入成 0 和 1"),
+             (t(0.0, 40.0).requires_grad_(), t(120.0, 0.0).requires_grad_()),
+             by_hand([-120.0, 40.0]))]
 
 
 def mistakes(r_chosen, r_rejected):
@@ -64,7 +69,16 @@ def mistakes(r_chosen, r_rejected):
             (tr("each answer classified on its own, -log sigmoid(r_w) - log(1 - sigmoid(r_l)): "
                 "only the gap is learned, r is free up to a constant per prompt",
                 "把每个回答单独当成分类：-log sigmoid(r_w) - log(1 - sigmoid(r_l))；只有分差是学到的，"
-                "对每个题目 r 可以整体加一个常数"), -(logsigmoid(w) + logsigmoid(-l)).mean())]
+                "对每个题目 r 可以整体加一个常数"), -(logsigmoid(w) + logsigmoid(-l)).mean()),
+            (tr("torch.log(torch.sigmoid(gap)): sigmoid rounds to 0 for a gap far below 0, and "
+                "its log is -inf; logsigmoid(gap) never does",
+                "写成了 torch.log(torch.sigmoid(分差))：分差远小于 0 时 sigmoid 舍入成 0，取 log 得 "
+                "-inf；logsigmoid(分差) 不会这样"),
+             only_if(bool((gap < -90).any()), -torch.log(torch.sigmoid(gap)).mean())),
+            (tr("the mean gap inside the log: -log sigmoid(mean(r_w - r_l)), where the loss is "
+                "the mean over the pairs of -log sigmoid(r_w - r_l)",
+                "先对分差求均值再取 log：写成了 -log sigmoid(mean(r_w - r_l))，损失应该是每对的 "
+                "-log sigmoid(r_w - r_l) 的均值"), -logsigmoid(gap.mean()))]
 
 
 def learned(result):

@@ -90,6 +90,75 @@ def ddpg_update_keeping(nets, batch, cfg, kept):
     ddpg.soft_update(actor_target, actor, cfg.tau)
 
 
+def ddpg_update_variant(nets, batch, cfg, y_graph=False, soft_first=False):
+    """The script's update with y computed with its graph (y_graph), or both soft updates
+    taken right after the critic's step, before the actor's (soft_first)."""
+    ddpg = importlib.import_module("ddpg_walker")
+    actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets.values()
+    obs, action, reward, next_obs, not_done = batch
+    with torch.set_grad_enabled(y_graph):
+        y = ddpg.td_target(reward, not_done, critic_target(next_obs, actor_target(next_obs)),
+                           cfg.gamma)
+    critic_loss = F.mse_loss(critic(obs, action), y)
+    critic_opt.zero_grad()
+    critic_loss.backward()
+    critic_opt.step()
+    for net, source in ((critic_target, critic), (actor_target, actor)) if soft_first else ():
+        ddpg.soft_update(net, source, cfg.tau)
+    actor_loss = ddpg.compute_loss_actor(actor, critic, obs)
+    actor_opt.zero_grad()
+    actor_loss.backward(inputs=list(actor.parameters()))
+    actor_opt.step()
+    for net, source in ((critic_target, critic), (actor_target, actor)) if not soft_first else ():
+        ddpg.soft_update(net, source, cfg.tau)
+
+
+def one_update_mistakes():
+    """(label, the networks after one update of small_ddpg() with that mistake)."""
+    tau = importlib.import_module("ddpg_walker").Config().tau
+    found = []
+    for number in dict.fromkeys((tau, 0.01, 0.005, 0.001, 0.05)):
+        nets, batch, cfg = small_ddpg()
+        importlib.import_module("ddpg_walker").ddpg_update(
+            *nets.values(), batch, SimpleNamespace(gamma=cfg.gamma, tau=number))
+        found.append((tr(f"{number!r}, the script's default, written as a number where cfg.tau "
+                         f"is meant: any other setting would be ignored",
+                         f"把 cfg.tau 写成了数字 {number!r}（脚本的默认值）：换成别的设置就不起作用了")
+                      if number == tau else
+                      tr(f"{number!r} written as a number where cfg.tau is meant (the script's "
+                         f"default is {tau!r}): any other setting would be ignored",
+                         f"把 cfg.tau 写成了数字 {number!r}（脚本的默认值是 {tau!r}）：换成别的设置就不"
+                         f"起作用了"), nets))
+    nets, batch, cfg = small_ddpg()
+    ddpg_update_variant(nets, batch, cfg, soft_first=True)
+    found.append((tr("both soft updates taken right after the critic's step, before the actor's: "
+                     "the actor's target then lags a step behind the actor",
+                     "两个软更新都放在评论员更新之后、演员更新之前了：目标演员就比演员落后一步"), nets))
+    nets, batch, cfg = small_ddpg()
+    ddpg_update_variant(nets, batch, cfg, y_graph=True)
+    found.append((tr("y computed without torch.no_grad(): the critic's loss sends a gradient "
+                     "into the target networks, which only the soft update may move",
+                     "计算 y 时没有放进 torch.no_grad()：评论员的损失把梯度传进了目标网络，"
+                     "而目标网络只该由软更新来改"), nets))
+    return found
+
+
+def same_networks(yours, nets, grads=False):
+    return all(torch.allclose(p, q, atol=1e-6) and (not grads or (p.grad is None) == (
+        q.grad is None) and (p.grad is None or torch.allclose(p.grad, q.grad, atol=1e-6)))
+               for name in ("critic", "actor", "critic_target", "actor_target")
+               for p, q in zip(yours[name].parameters(),
+                                                nets[name].parameters()))
+
+
+def one_update_named(yours, grads=False):
+    """The line naming the mistake whose networks after one update are `yours`, or ''."""
+    named = [label for label, nets in one_update_mistakes()
+             if same_networks(yours, nets, grads)]
+    return (tr("\n  this is exactly what this mistake gives: ",
+               "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0]) if named else ""
+
+
 def gap(p, q):
     return float((p - q).detach().abs().max())
 
@@ -115,7 +184,8 @@ def worked_cases(fn):
             raise Failed(case + tr(
                 f"a gradient reached {name}: the target was computed with the graph (put it "
                 f"under torch.no_grad(); the target is a constant)",
-                f"梯度传到了 {name}：TD 目标是带着计算图算的（放进 torch.no_grad()；目标是常数）"))
+                f"梯度传到了 {name}：TD 目标是带着计算图算的（放进 torch.no_grad()；目标是常数）")
+                + one_update_named(yours, grads=True))
     try:
         compare("critic_loss", got[0], expected[0])
     except Failed as e:
@@ -165,7 +235,8 @@ def worked_cases(fn):
                                        f"(largest difference {gap(p, q):.3g}): ",
                                        f"{what}：{pname} 和脚本自己的不同（最大相差 "
                                        f"{gap(p, q):.3g}）：") + hint
-                             + (swapped_steps if name == "actor" else ""))
+                             + (swapped_steps if name == "actor" else
+                                one_update_named(yours) if name.endswith("_target") else ""))
     try:
         compare("actor_loss", got[1], expected[1])
     except Failed as e:
