@@ -48,7 +48,7 @@ def load_checkpoint(path, required=(), script=None):
         raise UserError(f"{path} is not a model of {script}.py: it is " + (
             f"a model of {ckpt['script']}.py" if "script" in ckpt else
             "from an older version that did not record its script: train it again"))
-    if isinstance(ckpt, dict) and "buffer" in ckpt and "buffer" not in required:
+    if isinstance(ckpt, dict) and "obs" in ckpt and "obs" not in required:  # save() writes obs
         raise UserError(f"{path} is the run's checkpoint, for --resume {path.parent}; --eval "
                         "plays model.pt or best.pt (or the run folder)")
     if not isinstance(ckpt, dict) or not set(required) <= set(ckpt):
@@ -92,7 +92,7 @@ def config_to_resume(cfg, script):
     if path.exists():  # a read-only folder fails now, in one line
         check_writable(path.parent, "--resume goes on in the run's folder", "resume a writable "
                        "copy of it (--eval only reads it)")
-    saved = load_checkpoint(path, required=("config", "global_step", "buffer"), script=script)
+    saved = load_checkpoint(path, required=("config", "global_step", "obs"), script=script)
     may_change = type(cfg).MAY_CHANGE_ON_RESUME
     defaults = {f.name: f.default for f in dataclasses.fields(cfg)}
     kept = {**defaults, **{k: v for k, v in saved["config"].items() if k in defaults}}

@@ -1,6 +1,7 @@
 """What belongs to MuJoCo rather than to a script: its envs' whole state for an exact
---resume (MujocoEnvState), the GIFs' and the window's camera that follows the agent, and
-the check that an env id is a MuJoCo one. The MuJoCo scripts hand these to the tools.
+--resume (MujocoEnvState), the GIFs' and the window's camera that follows the agent,
+Reacher's fingertip distance, and the check that an env id is a MuJoCo one. The MuJoCo
+scripts hand these to the tools.
 """
 
 import gymnasium as gym
@@ -84,6 +85,16 @@ class MujocoVecEnvState:
         vec._autoreset_envs = saved["autoreset"].numpy().copy()
         for name in self.STATS:
             setattr(self.envs, name, saved[name].numpy().copy())
+
+
+def reacher_distance(trajectories):
+    """Reacher: the fingertip's mean distance to the target at the last step of evaluation
+    episodes (common.evaluate's trajectories), from the obs the last action was chosen in
+    (Reacher-v5's ends with fingertip - target, x and y); nan for another env."""
+    last = [episode["obs"][-1] for episode in trajectories]
+    if not last or len(last[0]) != 10:  # Reacher-v5's obs has 10 numbers
+        return float("nan")
+    return float(np.mean([np.linalg.norm(obs[-2:]) for obs in last]))
 
 
 def watch_camera(env_id):

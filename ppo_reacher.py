@@ -1,35 +1,30 @@
-"""PPO-clip with a Gaussian policy on MuJoCo Reacher-v5 (Schulman et al. 2017), a two-joint arm
-that reaches for a target, the kind of task tutorial 002's series is about, with 002's update.
+"""PPO-clip with a Gaussian policy on MuJoCo Reacher-v5 (Schulman et al. 2017): a two-joint arm
+reaching for a target, the kind of task tutorial 002's series is about, with 002's update.
 
-Read beside tutorial 002 (compute_loss_pi, compute_loss_v, update(), early stop at 1.5 x
-target_kl) and after ppo_cartpole.py, whose loop this one keeps. What changes with continuous
-actions: pi(a|s) is a Gaussian N(mu(s), sigma^2) (PolicyNetwork), log pi(a|s) is summed over
-the action's dimensions (gaussian_log_prob), and the env gets the sample clipped to its box.
-002's buffer: buf.store -> RolloutBuffer.store; finish_path(last_val) -> common.gae (the
-bootstrap rule above common.discounted_returns); buf.get -> batch_of. The loop in train():
+Read beside tutorial 002 (compute_loss_pi, compute_loss_v, update()) and after ppo_cartpole.py,
+whose loop this one keeps. With continuous actions pi(a|s) is a Gaussian N(mu(s), sigma^2)
+(PolicyNetwork), log pi(a|s) is summed over the action's dimensions (gaussian_log_prob), and
+the env gets the sample clipped to its box. 002's buf.store -> RolloutBuffer.store,
+finish_path(last_val) -> common.gae, buf.get -> batch_of. The loop in train():
 
     collect  num_steps x num_envs transitions, a ~ N(mu(s), sigma^2)
     GAE      advantages A_t and value targets R_t = A_t + V(s_t)   (common.gae)
     update   tutorial 002's update(): up to train_pi_iters full-batch policy steps, stopped
              once approx_kl > 1.5 x target_kl, then train_v_iters value steps
              (--update minibatch: ppo_cartpole.py's epochs of shuffled minibatches)
-    evaluate after the update that reaches each eval_every steps: eval_episodes episodes
-             of the mean action mu(s), clipped to the box
+    evaluate the mean action mu(s), clipped, after the update reaching each eval_every steps
 
     python ppo_reacher.py                       # 1M steps: ~25 minutes on a busy 2-core CPU
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
-Where this differs from tutorial 002 (docs/why.md): observations are normalised (--norm-obs,
-on; 002 has none); the init is the PPO reference code's (orthogonal); the env gets the action
-clipped to its box (002 passes the sample, and Reacher charges its control cost on it);
-Reacher's time limit bootstraps V (gymnasium says `truncated`; 002's old gym said done).
+Unlike 002 (docs/why.md): observations are normalised (--norm-obs); orthogonal init (the PPO
+reference code's); the env gets the action clipped to its box (002 passes the sample, and
+Reacher charges its control cost on it); a time limit bootstraps V (gymnasium's `truncated`).
 
 中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，和教程 002
 所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，
-对数概率在动作的各维上求和；更新按照教程 002 的 update()：在整批数据上最多做 train_pi_iters 次
-策略的梯度更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络的梯度更新。
---update minibatch 换成 ppo_cartpole.py 的小批量多轮更新。教程 002 的 buf.store、finish_path、
-buf.get 分别对应 RolloutBuffer.store、common.gae、batch_of。
+对数概率在动作的各维上求和；更新即教程 002 的 update()：整批数据上最多 train_pi_iters 次策略
+更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络更新。
 """
 
 import copy
@@ -114,8 +109,7 @@ class ValueNetwork(nn.Module):
 
 
 class MeanActor(nn.Module):
-    """The policy as the evaluations, the GIFs and --eval run it: obs -> normalized obs ->
-    mu(s), clipped to the action box (no sampling)."""
+    """The policy as evaluations, GIFs and --eval run it: mu(normalized obs), clipped to the box."""
 
     def __init__(self, obs_norm, policy, low, high):
         super().__init__()
@@ -142,8 +136,7 @@ class Config(cli.CheckpointFlags):
     print_every: int = 4000
     """print a progress line every this many env steps (4000: one a rollout, after its update)"""
     eval_every: int = 10_000
-    """evaluate the mean action (and save model.pt) after the update that reaches each
-    multiple of this many env steps"""
+    """evaluate mu(s) (and save model.pt) after the update reaching each multiple of this"""
     # --- collection ---
     num_envs: int = 1
     """parallel envs (Spinning Up and tutorial 002: 1; must divide --print-every)"""
@@ -155,8 +148,7 @@ class Config(cli.CheckpointFlags):
     """GAE lambda (tutorial 002 and Spinning Up: 0.97; CleanRL: 0.95)"""
     # --- the update ---
     update: str = "full_batch"
-    """full_batch: tutorial 002's update(); minibatch: ppo_cartpole.py's epochs of shuffled
-    minibatches (CleanRL's scheme)"""
+    """full_batch: tutorial 002's update(); minibatch: ppo_cartpole.py's (CleanRL's) epochs"""
     clip_ratio: float = 0.2
     """epsilon of the clipped surrogate (0.1 .. 0.3)"""
     pi_lr: float = 3e-4
@@ -168,8 +160,7 @@ class Config(cli.CheckpointFlags):
     train_v_iters: int = 80
     """full_batch: value steps per batch (tutorial 002: 80)"""
     target_kl: float | None = 0.01
-    """stop the policy's steps on a batch once approx_kl > kl_stop_factor * target_kl
-    (tutorial 002: 0.01); none = never"""
+    """stop a batch's policy steps once approx_kl > kl_stop_factor x this (002: 0.01); none=never"""
     kl_stop_factor: float = 1.5
     """the 1.5 of tutorial 002's early stop"""
     update_epochs: int = 10
@@ -186,12 +177,11 @@ class Config(cli.CheckpointFlags):
     """log sigma at the start: sigma = 0.61 (Spinning Up: -0.5)"""
     # --- normalisation (named options) ---
     norm_obs: bool = True
-    """feed the networks (obs - mean) / std, clipped to +-10 (the PPO paper's baselines code),
-    with the statistics of every obs before this rollout: held still within a rollout (ours;
-    baselines and CleanRL update them at every step); saved in model.pt"""
+    """feed the networks (obs - mean) / std clipped to +-10 (baselines' PPO), the statistics of
+    the obs before this rollout, held still within it (CleanRL: every step); saved in model.pt"""
     norm_reward: bool = False
-    """divide rewards by the running std of the discounted return, reset at every episode's
-    end (after gymnasium's NormalizeReward; no clip); saved in checkpoint.pt"""
+    """divide rewards by the running std of the discounted return (as gymnasium's
+    NormalizeReward, no clip); saved in checkpoint.pt"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -236,12 +226,6 @@ class RolloutBuffer:
         """Every field as a tensor on `device`, still shaped (T, N, ...)."""
         return {name: torch.as_tensor(array, device=device) for name, array in vars(self).items()}
 
-    def state_dict(self):  # checkpoint.pt is written between rollouts: nothing to keep
-        return {}
-
-    def load_state_dict(self, state):
-        pass
-
 
 def compute_loss_pi(policy, data, clip_ratio):
     """Tutorial 002's compute_loss_pi: the clipped surrogate on `data`, and pi_info (kl, ent, cf).
@@ -257,8 +241,7 @@ def compute_loss_pi(policy, data, clip_ratio):
     # Useful extra info (tutorial 002): approx_kl = E[log pi_old - log pi], as 002 writes it
     approx_kl = (logp_old - logp).mean().item()
     ent = pi.entropy().sum(-1).mean().item()  # all dimensions' (002's mean: per dimension)
-    clipped = ratio.gt(1 + clip_ratio) | ratio.lt(1 - clip_ratio)
-    clipfrac = torch.as_tensor(clipped, dtype=torch.float32).mean().item()
+    clipfrac = (ratio.gt(1 + clip_ratio) | ratio.lt(1 - clip_ratio)).float().mean().item()
     return loss_pi, dict(kl=approx_kl, ent=ent, cf=clipfrac, ratio=ratio.detach())
 
 
@@ -365,23 +348,12 @@ def after_update(policy, data, cfg, loss_pi, loss_v, entropy, pi_steps):
                                              if k != "clipfrac_after"})  # = clipfrac here
 
 
-def final_distance(trajectories):
-    """Reacher: the fingertip's mean distance to the target at the last step of the evaluation
-    episodes, in the obs the last action was chosen in (it ends with fingertip - target, x
-    and y); nan for another env."""
-    last = [episode["obs"][-1] for episode in trajectories]
-    if not last or len(last[0]) != 10:  # Reacher-v5's obs has 10 numbers
-        return float("nan")
-    return float(np.mean([np.linalg.norm(obs[-2:]) for obs in last]))
-
-
 def evaluate(run, actor, device, info, step, last):
-    """eval_episodes episodes of mu(s), clipped, no sampling: evaluations.csv's row (with the
-    last update's numbers `last`), model.pt, best.pt, the pictures (report.after_evaluation)."""
+    """Episodes of mu(s): evaluations.csv's row (with `last`: the update's), model.pt, best.pt."""
     cfg, seen = run.cfg, []  # seen: the evaluation's episodes, where the fingertip ended
     returns = common.evaluate(cfg.env_id, common.deterministic(actor, device),
                               cfg.eval_episodes, cfg.eval_seed, trajectories=seen)
-    row = dict(last, distance=final_distance(seen))
+    row = dict(last, distance=mujoco_env.reacher_distance(seen))
     best = run.evaluation(step, returns, **{key: row[key] for key in LOGGED})  # LOGGED's order
     report.after_evaluation(run, actor, best, device, info, pictures(cfg),
                             mujoco_env.gif_for(cfg.env_id))
@@ -399,14 +371,12 @@ LOGGED = dict(loss_pi=(None, "-L_CLIP before the update"), loss_v=(None, "L_VF b
 
 
 def pictures(cfg):
-    """inside.png (docs/inside.md): sigma shrinking (exploration), the fingertip's distance, the
-    policy steps the early stop allowed; r against [1 - eps, 1 + eps], how far pi moved."""
+    """inside.png (docs/inside.md): exploration shrinking, the arm reaching, the early stop."""
     band = (1 - cfg.clip_ratio, 1 + cfg.clip_ratio)
     limits = () if cfg.target_kl is None else (cfg.target_kl, cfg.kl_stop_factor * cfg.target_kl)
     return dict(inside=[
         [plots.lines("std_min", "std_max", title="exploration: sigma of pi", ylabel="sigma"),
-         plots.lines("distance", title="reaching: distance at the end (Reacher)",
-                     ylabel="fingertip to target"),
+         plots.lines("distance", title="reaching (Reacher)", ylabel="fingertip to target, end"),
          plots.lines("pi_steps", title="policy steps on the last batch", ylabel="policy steps",
                      ylim=(0, 1.05 * max(cfg.train_pi_iters, 10)))],
         [plots.spread("ratio", "r after the last update; dashed: 1 -+ eps", band,
@@ -448,10 +418,9 @@ def train(cfg: Config):
     actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
     autoreset = np.zeros(N, dtype=bool)  # which envs are at a NEXT_STEP autoreset step
     discounted = np.zeros(N)  # each env's discounted return so far (--norm-reward)
-    in_checkpoint = dict(policy=policy, value=value_net, obs_norm=obs_norm,
+    in_checkpoint = dict(policy=policy, value=value_net, obs_norm=obs_norm, log=run,
                          return_norm=return_norm, pi_optimizer=pi_optimizer,
-                         vf_optimizer=vf_optimizer, buffer=buffer, log=run,
-                         env=mujoco_env.MujocoVecEnvState(envs),
+                         vf_optimizer=vf_optimizer, env=mujoco_env.MujocoVecEnvState(envs),
                          rng=checkpoints.RandomState(envs, device),
                          loop=checkpoints.Arrays(autoreset=autoreset, discounted=discounted))
     global_step = 0
@@ -519,10 +488,9 @@ def main(argv=None):
     with cli.clear_exit():  # bad input: one line, exit 2; Ctrl-C: one line, exit 130
         saved = cfg.eval or report.saved_model(train(cfg))  # after a Ctrl-C: exit 130
         if cfg.eval or cfg.watch:  # play the saved actor (in a window with --watch)
-            actor, env_id = checkpoints.load_model(saved, SCRIPT, "actor", lambda ckpt: MeanActor(
-                common.RunningNorm(ckpt["obs_dim"]), PolicyNetwork(ckpt["obs_dim"], ckpt["act_dim"],
-                                                            ckpt["config"]["hidden"], 0.0),
-                np.array(ckpt["low"]), np.array(ckpt["high"])))
+            actor, env_id = checkpoints.load_model(saved, SCRIPT, "actor", lambda c: MeanActor(
+                common.RunningNorm(c["obs_dim"]), PolicyNetwork(c["obs_dim"], c["act_dim"],
+                c["config"]["hidden"], 0.0), np.array(c["low"]), np.array(c["high"])))
             mean = [("eval_returns", "mean action", lambda _: common.deterministic(actor, "cpu"))]
             report.play(cfg, saved, env_id, mean, mujoco_env.gif_for(env_id),
                         mujoco_env.watch_camera)

@@ -183,7 +183,7 @@ def test_ctrl_c_then_resume_is_the_unbroken_run_with_its_statistics(tmp_path, ex
     """Both normalisations on: Ctrl-C writes a checkpoint at a whole update; --resume ends as
     the run that never stopped, the same logs byte for byte, the same weights, optimizers and
     running statistics; --eval of its model.pt replays the last evaluation (the statistics
-    travel in model.pt)."""
+    travel in model.pt); --eval of checkpoint.pt says it is for --resume."""
     run = dict(SHORT, total_timesteps=1200, norm_reward=True, checkpoint_every=400,
                gifs=False, **extra)
     unbroken = ppo.train(ppo.Config(**run, run_dir=str(tmp_path / "unbroken")))
@@ -208,6 +208,8 @@ def test_ctrl_c_then_resume_is_the_unbroken_run_with_its_statistics(tmp_path, ex
         np.array(c["low"]), np.array(c["high"])))
     returns = ppo.common.evaluate("Reacher-v5", ppo.common.deterministic(actor, "cpu"), 2, 10_000)
     assert np.mean(returns) == pytest.approx(unbroken["evaluations"][-1]["eval_mean"], abs=1e-4)
+    with pytest.raises(ppo.common.UserError, match="is the run's checkpoint, for --resume"):
+        ppo.checkpoints.load_model(cut / "checkpoint.pt", ppo.SCRIPT, "actor", None)  # not --eval
 
 
 @pytest.mark.parametrize("args,needle", [
