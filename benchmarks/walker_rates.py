@@ -5,10 +5,10 @@ scripts after a short random warm-up), the rate the script itself prints at its 
 ("learning phase: N steps at R steps/s"). The scripts run
 in rounds, each round all four in a shuffled order, two at a time; the record keeps every
 rate. With the 1M-step records, the rates turn equal wall-clock time into equal steps:
-docs/results.md's table at equal time.
+docs/results.md's table at equal time (--table).
 
-    python benchmarks/walker_rates.py              # 2 rounds: ~10 minutes on 2 cores
-    python benchmarks/walker_rates.py --table      # the record's medians
+    python benchmarks/walker_rates.py              # 2 rounds: ~2 minutes on 2 quiet cores
+    python benchmarks/walker_rates.py --table      # the record's medians, the equal-time table
 """
 
 import argparse
@@ -25,9 +25,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import ddpg_walker_1m as records  # noqa: E402  the 1M records and how they are read
 from ddpg_walker_1m import FLAGS  # noqa: E402  PPO's Walker2d settings, once
 
 RECORD = ROOT / "benchmarks" / "results" / "walker_rates.json"
+WARM_UP = 25_000  # the random steps before DDPG's, TD3's and SAC's records learn (start_steps)
 RATE = re.compile(r"^learning phase: (\d+) steps at ([\d.]+) steps/s")
 OFF_POLICY = ["--start-steps", "1000", "--total-timesteps", "4000", "--eval-every", "5000"]
 RUNS = {"ddpg_walker": OFF_POLICY, "td3_walker": OFF_POLICY, "sac_walker": OFF_POLICY,
@@ -50,6 +52,38 @@ def rate(script, tmp):
     return float(found[0][2])
 
 
+def budgets(rates):
+    """The equal times of docs/results.md, in seconds: what PPO needs for its 1M steps, then 30
+    and 60 minutes (PPO's record ends at 1M, reached in the first; the others' reach 1M, or
+    525,000 steps and more for SAC and TD3)."""
+    return records.BUDGET / statistics.median(rates["ppo_reacher"]), 1800, 3600
+
+
+def at_equal_time(rates, seconds):
+    """docs/results.md's table at equal wall-clock time: `seconds` of each script's learning
+    phase at its median rate is rate x seconds env steps, after the off-policy records' random
+    warm-up, counted as free (which favours them); down to the records' 5000-step grid, at most
+    1M, where the records end. Per seed: the last 10 evaluations up to that step and the
+    highest up to there; over the seeds whose record reaches it, their mean (se)."""
+    print(f"| {seconds / 60:.1f} minutes | steps | seeds | last 10, each seed | their mean (se) | "
+          "highest, each seed | their mean (se) |")
+    print("|---|---|---|---|---|---|---|")
+    for script, rate_of in rates.items():
+        free = 0 if script == "ppo_reacher" else WARM_UP
+        at = min((free + int(statistics.median(rate_of) * seconds)) // 5000 * 5000, records.BUDGET)
+        seeds, lasts, highs = [], [], []
+        for seed in records.SEEDS_OF.get(script, records.ALL):
+            rows = records.read(records.record(seed, script))
+            if rows[-1][0] >= at:
+                seeds.append(seed)
+                lasts.append(records.last10(rows, at))
+                highs.append(max(m for step, m in rows if step <= at))
+        each = ", ".join
+        print(f"| {records.NAMES[script]} | {at:,} | {each(map(str, seeds))} | "
+              f"{each(f'{x:.0f}' for x in lasts)} | {records.mean_se(lasts)} | "
+              f"{each(f'{x:.0f}' for x in highs)} | {records.mean_se(highs)} |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rounds", type=int, default=2)
@@ -68,6 +102,9 @@ def main():
     for script, values in record["rates"].items():
         print(f"{script:12} median {statistics.median(values):7.1f} steps/s over "
               f"{len(values)} runs: {', '.join(f'{v:.1f}' for v in values)}")
+    for seconds in budgets(record["rates"]):
+        print()
+        at_equal_time(record["rates"], seconds)
 
 
 if __name__ == "__main__":

@@ -377,7 +377,8 @@ def test_the_ppo_sections_are_their_records(capsys):
     """The PPO-on-Reacher table is what `bench_reacher.py --table` prints from its record
     (the English page word for word; the Chinese page its numbers, row by row), and the
     PPO-on-Walker2d tables what `ddpg_walker_1m.py table` and `at 300000 --script ppo_reacher`
-    print from the committed evaluations.csv files."""
+    print from the committed evaluations.csv files, and its tables at equal wall-clock time
+    what `walker_rates.py --table` prints from them and the measured rates."""
     spec = importlib.util.spec_from_file_location("bench_reacher",
                                                   ROOT / "benchmarks" / "bench_reacher.py")
     bench = importlib.util.module_from_spec(spec)
@@ -387,8 +388,16 @@ def test_the_ppo_sections_are_their_records(capsys):
     module.SCRIPT, module.SEEDS = "ppo_reacher", module.SEEDS_OF["ppo_reacher"]
     module.table()
     module.at_equal_steps(300_000, list(module.NAMES))
+    spec = importlib.util.spec_from_file_location("walker_rates",
+                                                  ROOT / "benchmarks" / "walker_rates.py")
+    timed = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(timed)
+    rates = json.loads(timed.RECORD.read_text())["rates"]
+    for seconds in timed.budgets(rates):
+        timed.at_equal_time(rates, seconds)
     walker = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ")
-              and not line.startswith(("| seed |", "| algorithm |"))]  # the rows, not headers
+              and not line.startswith(("| seed |", "| algorithm |"))
+              and " minutes | " not in line]  # the rows, not headers
     for path, arm, walk in PPO_PAGES:
         page = path.read_text(encoding="utf-8")
         arm_section = page.split(arm)[1].split("\n## ")[0]
