@@ -853,6 +853,68 @@ WRONG["q_learning_update"] = td_wrong(False) + [
     (td_answer(False, value="Q.max()"), "(a)", "the max over the whole table"),
 ]
 
+# Named mistakes: a setting written as a number (the script's default or a usual one), a sum
+# where the mean belongs, a std over the wrong axis, gamma and lambda swapped, and the like
+EXACTLY = "this is exactly what this mistake gives: "
+A2C_LOSS = """def a2c_loss(model, data, cfg):
+        obs, act, adv, ret = data["obs"], data["act"], data["adv"], data["ret"]
+        logits, values = model(obs)
+        dist = Categorical(logits=logits)
+        loss_pi = -(dist.log_prob(act) * adv).mean()
+        loss_v = 0.5 * ((values - ret) ** 2).mean()
+        entropy = dist.entropy().mean()
+        loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
+        explained = 1 - (ret - values).var() / ret.var().clamp_min(1e-8)
+        return loss, dict(loss_pi=loss_pi.item(), loss_v=loss_v.item(), entropy=entropy.item(),
+                          explained_var=explained.item(), values=values.detach(), ret=ret)"""
+GAE = """def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
+        advantages, last = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
+        not_terminated = (~terminated).to(rewards.dtype)
+        not_done = (~(terminated | truncated)).to(rewards.dtype)
+        for t in reversed(range(len(rewards))):
+            delta = rewards[t] + gamma * next_values[t] * not_terminated[t] - values[t]
+            last = advantages[t] = delta + gamma * lam * not_done[t] * last
+        return advantages"""
+WRONG["discounted_returns"] += [
+    ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
+            returns, future = torch.zeros_like(rewards), next_values[-1]
+            for t in reversed(range(len(rewards))):
+                future = torch.where(terminated[t], 0.0, torch.where(truncated[t],
+                                                                     next_values[t], future))
+                returns[t] = future = rewards[t] + 0.99 * future
+            return returns""", "(a)", EXACTLY + "0.99 written as a number where gamma is meant")]
+WRONG["a2c_loss"] += [(A2C_LOSS.replace(old, new), "(a)", EXACTLY + needle)
+                      for old, new, needle in (
+    ("cfg.vf_coef", "0.5", "0.5 written as a number where cfg.vf_coef is meant"),
+    ("-(dist.log_prob(act) * adv).mean()", "-(dist.log_prob(act) * adv).sum()",
+     "loss_pi summed over the batch"),
+    ("dist.entropy().mean()", "dist.entropy().sum()", "the entropy summed over the batch"))]
+WRONG["sarsa_update"] += [(td_answer(True).replace("alpha *", "0.5 *"), "(a)",
+                           EXACTLY + "0.5, the script's default, written as a number where alpha")]
+WRONG["q_learning_update"] += [(td_answer(False).replace("Q[s, a] +=", "Q[s] +="), "(a)",
+                                EXACTLY + "the whole row Q[s] moved")]
+WRONG["td_target"] += [("""def td_target(reward, not_done, next_q, gamma):
+                              return gamma * (reward + not_done * next_q)""", "(a)",
+                        EXACTLY + "gamma on the reward too")]
+WRONG["gae"] += [(GAE.replace("gamma * next_values[t]", "lam * next_values[t]").replace(
+    "gamma * lam *", "gamma *"), "(a)", EXACTLY + "gamma and lambda swapped")]
+WRONG["group_advantages"] += [("""def group_advantages(rewards, G, scale):
+        r = rewards.view(-1, G)
+        adv = r - r.mean(1, keepdim=True)
+        if scale:
+            adv = adv / (r.std(0, keepdim=True) + 1e-4)
+        return adv.reshape(-1)""", "(a)", EXACTLY + "the std over axis 0")]
+WRONG["bradley_terry_loss"] = [(f"""def bradley_terry_loss(r_chosen, r_rejected):
+        return {body}""", "(a)", EXACTLY + needle) for body, needle in (
+    ("-torch.log(torch.sigmoid(r_chosen - r_rejected)).mean()", "torch.log(torch.sigmoid(gap))"),
+    ("-F.logsigmoid((r_chosen - r_rejected).mean())", "the mean gap inside the log"))]
+WRONG["reward_to_go"] += [(script_with("reward_to_go", old, new), "(a)", needle)
+                          for old, new, needle in (
+    ("np.zeros(len(rewards))", "np.zeros_like(rewards)", "an integer array truncates every G_t"),
+    ("returns, G = np.zeros(len(rewards)), last_value", "returns, G = np.zeros(len(rewards)), "
+     "gamma * last_value", EXACTLY + "G started at gamma * last_value"))]
+
+
 @pytest.fixture(autouse=True)
 def english():
     """The messages in English whatever the locale (the checker's default follows it)."""

@@ -74,6 +74,14 @@ def mistakes(model, data, cfg):
              only_if(bool(((values - data["ret"]).abs() > 1).any()),  # else Huber is the same
                      loss_pi + cfg.vf_coef * F.smooth_l1_loss(values, data["ret"])
                      - cfg.ent_coef * ent)),
+            (tr("loss_pi summed over the batch (.sum()) where it is the mean (.mean()): its "
+                "weight against the critic's and the entropy's grows with the batch",
+                "loss_pi 对批量求了和（.sum()），应该求均值（.mean()）：它相对评论员项和熵项的"
+                "分量会随批量变大"),
+             -(logp * data["adv"]).sum() + cfg.vf_coef * loss_v - cfg.ent_coef * ent),
+            (tr("the entropy summed over the batch (.sum()) where it is the mean (.mean())",
+                "熵对批量求了和（.sum()），应该求均值（.mean()）"),
+             loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * dist.entropy().sum()),
             (tr("the actor's sign: +mean(log pi * A) (the loss is minus it)",
                 "演员项的符号反了：损失应该是 -mean(log π * A)"),
              -loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * ent)]

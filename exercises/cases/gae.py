@@ -55,7 +55,7 @@ def cases():
 
 
 def gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=True, cut_at_trunc=True,
-             term_wins=True, next_v=True, term_resets=True, shifted=False):
+             term_wins=True, next_v=True, term_resets=True, shifted=False, swapped=False):
     adv, last = torch.zeros_like(r), torch.zeros_like(r[0])
     if shifted:  # values[t + 1] read as V(s_{t+1}), next_values only at the end
         nv = torch.cat([v[1:], nv[-1:]])
@@ -64,15 +64,23 @@ def gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=True, cut_at_trunc=T
         boots = boots & ~trunc[t] if not trunc_boots else boots
         keep = ~(term[t] | trunc[t]) if cut_at_trunc else ~term[t]
         keep = keep if term_resets else torch.ones_like(keep)
-        delta = r[t] + gamma * (nv[t] if next_v else v[t]) * boots.float() - v[t]
-        last = adv[t] = delta + gamma * lam * keep.float() * last
+        discount = lam if swapped else gamma
+        delta = r[t] + discount * (nv[t] if next_v else v[t]) * boots.float() - v[t]
+        last = adv[t] = delta + (gamma if swapped else gamma * lam) * keep.float() * last
     return adv
 
 
 def mistakes(r, v, nv, term, trunc, gamma, lam):
     cut, both = (trunc & ~term).any(), (trunc & term).any()  # what the case has
     carried = (~(term | trunc))[:-1].any()  # some A_{t+1} is added in
-    return [(tr("a time-limit truncation treated as a termination in delta (no bootstrap there)",
+    right = gae_with(r, v, nv, term, trunc, gamma, lam)
+    swapped = gae_with(r, v, nv, term, trunc, gamma, lam, swapped=True)
+    return [(tr("gamma and lambda swapped: lambda in delta (r + lambda * V(s') - V(s)) and gamma "
+                "alone in the sum; delta discounts by gamma, the sum by gamma * lambda",
+                "gamma 和 lambda 弄反了：delta 里用了 lambda（r + lambda * V(s') - V(s)），累加时只乘"
+                "了 gamma；delta 用 gamma 打折，累加用 gamma * lambda"),
+             only_if(not torch.allclose(swapped, right), swapped)),
+            (tr("a time-limit truncation treated as a termination in delta (no bootstrap there)",
                 "在 delta 里把时间截断当成了终止（那里没有自举）"),
              only_if(cut, gae_with(r, v, nv, term, trunc, gamma, lam, trunc_boots=False))),
             (tr("the sum runs on past a truncation (what follows belongs to the next episode)",

@@ -57,6 +57,12 @@ def mistakes(rewards, G, scale):
                 "分组分错了（view(G, -1)）：一组是连续的 G 个奖励"),
              (lambda r: (r - r.mean(0, keepdim=True)) / (
                  r.std(0, keepdim=True) + 1e-4 if scale else 1))(rewards.view(G, -1)).reshape(-1)),
+            (tr("the std over axis 0 (r.std(0), across the groups) where each group's is over "
+                "axis 1 (r.std(1)), like its mean",
+                "标准差是沿第 0 维算的（r.std(0)，跨组），每组的标准差要沿第 1 维算（r.std(1)），"
+                "和均值一样"),
+             only_if(scale and rewards.numel() > G, (lambda r: (r - r.mean(1, keepdim=True)) / (
+                 r.std(0, keepdim=True) + 1e-4))(rewards.view(-1, G)).reshape(-1))),
             (tr("the 1e-4 left out of the denominator", "分母里漏了 1e-4"),
              only_if(scale, adv(eps=0.0))),
             (tr("the 1e-4 as a floor (std.clamp_min(1e-4)) where it is added (std + 1e-4)",

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import torch
 
-from checking import tr, Failed, t, as_list, compare, written_default
+from checking import only_if, tr, Failed, t, as_list, compare, written_default
 import runs
 
 SCRIPT = "reinforce_cartpole"
@@ -43,6 +43,9 @@ def reward_to_go_cases():
          (1.919, -0.09, -0.1, 1.0)),
         (tr("one step, cut by a time limit: G_0 = 5 + 0.5 * 2", "只有一步，被时间截断：G_0 = 5 + 0.5 * 2"),
          ((5.0,), 0.5, 2.0), (6.0,)),
+        (tr("integer rewards (1, 1, 1), terminated, gamma = 0.5: the returns 1.75, 1.5, 1 are not "
+            "integers", "整数奖励 (1, 1, 1)，终止，gamma = 0.5：回报 1.75、1.5、1 不是整数"),
+         ((1, 1, 1), 0.5, 0.0), (1.75, 1.5, 1.0)),
     ]
 
 
@@ -97,6 +100,21 @@ def reward_to_go_mistakes(rewards, gamma, last_value):
             "G_T，\n    应该是 r_{T-1} + gamma * last_value"),
          [g + gamma ** (T - 1 - i) * last_value
           for i, g in enumerate(back(lambda x, G: x + gamma * G, 0.0))]),
+        (tr("last_value added, undiscounted, to the last step's G only: it is G_T, and reaches "
+            "every G_t, discounted by gamma^(T - t)",
+            "只在最后一步的 G 上加了 last_value，还没有打折：它是 G_T，每个 G_t 都要算上它，"
+            "折扣是 gamma^(T - t)"),
+         only_if(last_value != 0, [g + (last_value if i == T - 1 else 0.0)
+                                   for i, g in enumerate(back(lambda x, G: x + gamma * G, 0.0))])),
+        (tr("G started at gamma * last_value, so last_value is discounted twice: G_T = "
+            "last_value, and the step G_{T-1} = r_{T-1} + gamma * G_T discounts it once",
+            "G 从 gamma * last_value 开始，last_value 就打了两次折：G_T = last_value，"
+            "G_{T-1} = r_{T-1} + gamma * G_T 已经给它打了一次折"),
+         only_if(last_value != 0, back(lambda x, G: x + gamma * G, gamma * last_value))),
+        (tr("G_t stored before r_t is added (returns[t] = G, then G = r_t + gamma * G): each step "
+            "holds G_{t+1}, the return of the step after it",
+            "先存 G 再加上 r_t（returns[t] = G，然后 G = r_t + gamma * G）：每一步存的都是 "
+            "G_{t+1}，即后一步的回报"), right[1:] + [last_value]),
         (tr("the returns in reverse order: appended in the backward loop and not turned round "
             "(returns[T - 1 - t] holds G_t)", "回报的顺序反了：在往回的循环里 append，最后没有"
             "倒过来（returns[T - 1 - t] 里放的是 G_t）"), right[::-1])] + [
@@ -112,6 +130,17 @@ def worked_cases(fn):
         inputs = (tr("\n  input: ", "\n  输入：")
                   + f"rewards={rewards}, gamma={gamma}, last_value={last_value}")
         try:
+            if values is not None and (not isinstance(got, np.ndarray) or got.dtype.kind != "f"):
+                raise Failed(tr(f"expected a numpy array of floats (np.zeros(len(rewards)), as "
+                                f"the script's own makes), got {type(got).__name__}"
+                                + (f" of {got.dtype}: an integer array truncates every G_t "
+                                   f"stored in it (np.zeros_like of integer rewards is one)"
+                                   if isinstance(got, np.ndarray) else ""),
+                                f"应该返回浮点数的 numpy 数组（像脚本自己那样用 np.zeros(len(rewards))），"
+                                f"得到的是 {type(got).__name__}"
+                                + (f"，类型是 {got.dtype}：整数数组会把存进去的每个 G_t 截断成整数"
+                                   f"（对整数奖励用 np.zeros_like 就得到这样的数组）"
+                                   if isinstance(got, np.ndarray) else "")))
             if values is None or np.ndim(values) != 1:
                 raise Failed(tr(f"expected an array of {len(rewards)} numbers (one G_t per step), "
                                 f"got {type(got).__name__} {got!r}",
@@ -121,7 +150,8 @@ def worked_cases(fn):
         except Failed as e:
             named = [label for label, value in reward_to_go_mistakes(rewards, gamma, last_value)
                      if values is not None and np.shape(values) == np.shape(value)
-                     and np.allclose(values, value, atol=1e-5)]
+                     and np.allclose(values, value, atol=1e-5)
+                     and not np.allclose(value, expected, atol=1e-5)]  # a wrong value only
             raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {e}" + (tr(
                 "\n  this is exactly what this mistake gives: ",
                 "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None

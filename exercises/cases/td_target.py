@@ -34,6 +34,10 @@ def mistakes(reward, not_done, next_q, gamma):
             (tr("(1 - not_done): not_done is already 1 - terminated",
                 "写成了 (1 - not_done)：not_done 本身就是 1 - terminated"),
              reward + gamma * (1 - not_done) * next_q),
+            (tr("gamma on the reward too, gamma * (r + not_done * Q'): r comes now, undiscounted; "
+                "only the future is discounted",
+                "奖励也乘了 gamma，写成了 gamma * (r + not_done * Q')：r 是现在拿到的，不打折；"
+                "打折的只是未来"), gamma * (reward + not_done * next_q)),
             (tr("gamma left out", "漏了 gamma"), reward + not_done * next_q),
             (tr("(r + gamma * Q') * not_done: the reward itself zeroed at a termination; only "
                 "the future is cut, r + gamma * not_done * Q'",
