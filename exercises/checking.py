@@ -428,7 +428,12 @@ def check_cases(ex, fn):
         for a, b in zip(args, saved):
             if torch.is_tensor(a) and not torch.equal(a, b):
                 raise Failed(tr(f"{what}: your function changed one of its inputs in place",
-                                f"{what}：你的函数原地改了它的一个输入"))
+                                f"{what}：你的函数原地改了它的一个输入") + tr(
+                    "\n  this is exactly what this mistake does: a result written into an input "
+                    "(x[t] = ..., +=, .add_()):\n    the caller's tensor is changed too; write "
+                    "into a new one (torch.zeros_like(x), x.clone())",
+                    "\n  这正是这个常见错误的表现：\n    把结果写进了输入（x[t] = ...、+=、.add_()）："
+                    "调用者手里的张量也被改了；要写进新的张量（torch.zeros_like(x)、x.clone()）"))
         try:
             if isinstance(expected, tuple):
                 if not isinstance(got, tuple) or len(got) < len(expected):

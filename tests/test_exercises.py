@@ -883,6 +883,24 @@ WRONG["discounted_returns"] += [
                                                                      next_values[t], future))
                 returns[t] = future = rewards[t] + 0.99 * future
             return returns""", "(a)", EXACTLY + "0.99 written as a number where gamma is meant")]
+WRONG["discounted_returns"] += [
+    ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
+            future = next_values[-1]
+            for t in reversed(range(len(rewards))):
+                future = torch.where(terminated[t], 0.0, torch.where(truncated[t],
+                                                                     next_values[t], future))
+                rewards[t] = future = rewards[t] + gamma * future
+            return rewards""", "(a)",
+     "this is exactly what this mistake does: a result written into an input")]
+WRONG["discounted_returns"] += [
+    ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
+            returns, future, T = torch.zeros_like(rewards), next_values[-1], len(rewards)
+            for t in reversed(range(T)):
+                future = torch.where(truncated[t], next_values[t], future)
+                if t + 1 < T:
+                    future = torch.where(terminated[t + 1], torch.zeros_like(future), future)
+                returns[t] = future = rewards[t] + gamma * future
+            return returns""", "(a)", EXACTLY + "terminated[t + 1] read at step t")]
 WRONG["a2c_loss"] += [(A2C_LOSS.replace(old, new), "(a)", EXACTLY + needle)
                       for old, new, needle in (
     ("cfg.vf_coef", "0.5", "0.5 written as a number where cfg.vf_coef is meant"),
@@ -913,6 +931,29 @@ WRONG["reward_to_go"] += [(script_with("reward_to_go", old, new), "(a)", needle)
     ("np.zeros(len(rewards))", "np.zeros_like(rewards)", "an integer array truncates every G_t"),
     ("returns, G = np.zeros(len(rewards)), last_value", "returns, G = np.zeros(len(rewards)), "
      "gamma * last_value", EXACTLY + "G started at gamma * last_value"))]
+
+
+ADAPT_BETA = """def adapt_beta(beta, d, cfg):
+        if d < cfg.d_targ / cfg.kl_tolerance:
+            return beta / cfg.beta_factor
+        if d > cfg.d_targ * cfg.kl_tolerance:
+            return beta * cfg.beta_factor
+        return beta"""
+WRONG["adapt_beta"] += [(ADAPT_BETA.replace(old, new), "(a)", EXACTLY + needle)
+                        for old, new, needle in (
+    ("return beta / cfg.beta_factor", "return beta", "beta never lowered"),)]
+WRONG["adapt_beta"] += [(ADAPT_BETA.replace("beta / cfg", "beta - cfg").replace(
+    "beta * cfg", "beta + cfg"), "(a)", EXACTLY + "beta moved by adding and subtracting")]
+WRONG["adapt_beta"] += [(ADAPT_BETA.replace("kl_tolerance", "TOL").replace(
+    "beta_factor", "kl_tolerance").replace("TOL", "beta_factor"), "(a)",
+    EXACTLY + "cfg.kl_tolerance and cfg.beta_factor swapped")]
+WRONG["kl_penalty"] += [(script_with("kl_penalty", "ratio = torch.exp(logp - logp_old)",
+                                     "ratio = logp - logp_old"), "(a)",
+                         EXACTLY + "the ratio without exp")]
+WRONG.setdefault("gaussian_log_prob", []).append(("""def gaussian_log_prob(mu, log_std, act):
+        z = (act - mu) / log_std.exp()
+        return (-0.5 * z ** 2 - log_std - 0.5 * math.log(2 * math.pi)).sum(0)""", "(a)",
+    EXACTLY + "summed over the batch (.sum(0), axis 0)"))
 
 
 @pytest.fixture(autouse=True)

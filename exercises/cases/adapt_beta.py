@@ -51,4 +51,26 @@ def mistakes(beta, d, cfg):
              only_if(d == lo, beta / cfg.beta_factor)),
             (tr(">= at the band's upper edge, where the paper's rules are strict (< and >)",
                 "区间上边界用了 >=，论文的规则是严格的 < 和 >"),
-             only_if(d == hi, beta * cfg.beta_factor))]
+             only_if(d == hi, beta * cfg.beta_factor)),
+            (tr("beta moved by adding and subtracting the factor (beta +- cfg.beta_factor), "
+                "where it is multiplied and divided by it",
+                "β 是加减倍数（beta ± cfg.beta_factor）变的，应该是乘以和除以它"),
+             only_if(outside, beta - cfg.beta_factor if d < lo else beta + cfg.beta_factor)),
+            (tr("beta never lowered: the rule for d below the band (beta / cfg.beta_factor) "
+                "left out", "β 从来不减小：漏了 d 低于区间时的规则（beta / cfg.beta_factor）"),
+             only_if(d < lo, beta))] + [
+            (tr("cfg.kl_tolerance and cfg.beta_factor swapped: the band d_targ / factor to "
+                "d_targ * factor, and beta multiplied or divided by the tolerance",
+                "cfg.kl_tolerance 和 cfg.beta_factor 弄反了：区间成了 d_targ / 倍数 到 "
+                "d_targ * 倍数，β 乘以或除以的是容差"), only_if(swapped != right, swapped))
+            for right, swapped in [(adapted(beta, d, cfg.d_targ, cfg.kl_tolerance,
+                                            cfg.beta_factor),
+                                    adapted(beta, d, cfg.d_targ, cfg.beta_factor,
+                                            cfg.kl_tolerance))]]
+
+
+def adapted(beta, d, d_targ, tolerance, factor):
+    """The paper's rule with the tolerance and the factor given."""
+    if d < d_targ / tolerance:
+        return beta / factor
+    return beta * factor if d > d_targ * tolerance else beta

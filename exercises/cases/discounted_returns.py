@@ -50,12 +50,14 @@ def cases():
 
 
 def returns_with(r, nv, term, trunc, gamma, cut=True, trunc_boots=True, term_wins=True,
-                 term_resets=True, shift=0):
+                 term_resets=True, shift=0, late=False):
     out, future = torch.zeros_like(r), (nv[-1] if cut else torch.zeros_like(r[0]))
     zero = torch.zeros_like(r[0])
     for t in reversed(range(len(r))):
         boot = (nv[t - shift] if trunc_boots else zero)
         ended = term[t] if term_resets else torch.zeros_like(term[t])
+        if late:  # the flag of step t + 1 read at t
+            ended = term[t + 1] if t + 1 < len(r) else torch.zeros_like(term[t])
         if term_wins:
             future = torch.where(ended, zero, torch.where(trunc[t], boot, future))
         else:
@@ -87,4 +89,9 @@ def mistakes(r, nv, term, trunc, gamma):
             (tr("the future is not reset where an episode terminated (the next episode's "
                 "rewards leak in)", "回合终止处没有把未来清零（下一个回合的奖励漏了进来）"),
              only_if(term[:-1].any(), returns_with(r, nv, term, trunc, gamma,
-                                                   term_resets=False)))]
+                                                   term_resets=False))),
+            (tr("terminated[t + 1] read at step t, where step t's own flag belongs: the future "
+                "is cut a step off (the terminal step's return runs into the next episode)",
+                "在第 t 步读了 terminated[t + 1]，应该读第 t 步自己的标志：未来在错的一步被清零"
+                "（终止那一步的回报跑进了下一个回合）"),
+             only_if(term.any(), returns_with(r, nv, term, trunc, gamma, late=True)))]

@@ -59,7 +59,8 @@ def variant(mu, log_std, act, reduce="sum", sigma=None, square=True, log_sigma=1
     s = log_std.exp() if sigma is None else sigma(log_std)
     quadratic = quadratic_sign * (act - mu) ** 2 / (2 * (s ** 2 if square else s))
     per_dim = quadratic - log_sigma * log_std - (0.5 * math.log(2 * math.pi) if constant else 0)
-    return dict(sum=lambda x: x.sum(-1), mean=lambda x: x.mean(-1), none=lambda x: x)[reduce](
+    return dict(sum=lambda x: x.sum(-1), mean=lambda x: x.mean(-1), none=lambda x: x,
+                batch=lambda x: x.sum(0))[reduce](
         per_dim)
 
 
@@ -96,4 +97,8 @@ def mistakes(mu, log_std, act):
         (tr("no sum over the action's dimensions: each dimension's log density apart, (B, "
             "act_dim); log pi(a|s) is their sum, .sum(-1), (B,)",
             "没有对动作的各维求和：得到的是每一维各自的对数密度，形状 (B, act_dim)；log π(a|s) "
-            "是它们的和，.sum(-1)，形状 (B,)"), variant(mu, log_std, act, reduce="none"))]
+            "是它们的和，.sum(-1)，形状 (B,)"), variant(mu, log_std, act, reduce="none")),
+        (tr("summed over the batch (.sum(0), axis 0) where the sum is over the action's "
+            "dimensions (.sum(-1)): one number per dimension, not per action",
+            "对批量求了和（.sum(0)，第 0 维），应该对动作的各维求和（.sum(-1)）：得到的是每一维一个数，"
+            "不是每个动作一个"), variant(mu, log_std, act, reduce="batch"))]

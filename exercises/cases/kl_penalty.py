@@ -58,6 +58,9 @@ def mistakes(policy, data, beta):
                 "distributions belongs (kl_divergence)", "用了 KL 的样本估计 mean(logp_old - logp)，"
                 "应该用两个分布的精确 KL（kl_divergence）"),
              -s + beta * (data["logp"] - dist.log_prob(data["act"])).mean()),
+            (tr("the ratio without exp: logp - logp_old, a log-ratio, where r = exp(logp - "
+                "logp_old)", "比值没有取 exp：logp - logp_old 是对数比值，r = exp(logp - logp_old)"),
+             -((dist.log_prob(data["act"]) - data["logp"]) * data["adv"]).mean() + beta * kl),
             (tr("the KL summed over the batch (.sum()) where its mean belongs (.mean())",
                 "KL 对批量求了和（.sum()），应该求均值（.mean()）"),
              -s + beta * kl_divergence(old, dist).sum())]
