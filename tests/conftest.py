@@ -145,12 +145,17 @@ HEAVY = ("test_experiments.py", "test_ddpg_walker.py", "test_td3_walker.py",
          "test_grpo_addition.py", "test_exercises.py")
 
 
-def pytest_collection_modifyitems(items):
-    """The worked examples in common.py's docstrings are part of the quick layer. The longest
-    tests go first: pytest-xdist hands tests out one at a time (--maxschedchunk 1, pytest.ini),
-    so the workers, busy with the long ones from the start, end together."""
+def pytest_collection_modifyitems(config, items):
+    """The worked examples in common.py's docstrings are part of the quick layer; a slow test
+    is not, even in a file whose tests are quick. The longest tests go first: pytest-xdist
+    hands tests out one at a time (--maxschedchunk 1, pytest.ini), so the workers, busy with
+    the long ones from the start, end together."""
     for item in items:
         if isinstance(item, pytest.DoctestItem):
             item.add_marker(pytest.mark.quick)
+    if config.getoption("markexpr") == "quick":  # pytest -m quick: no learning runs
+        slow = [item for item in items if item.get_closest_marker("slow")]
+        config.hook.pytest_deselected(items=slow)
+        items[:] = [item for item in items if not item.get_closest_marker("slow")]
     items.sort(key=lambda item: (item.get_closest_marker("slow") is None,
                                  item.path.name not in HEAVY))
