@@ -270,7 +270,7 @@ def train(cfg: Config):
     tables = {agent: np.zeros((n_states, n_actions)) for agent in AGENTS}
     rngs = {agent: np.random.default_rng(cfg.seed) for agent in AGENTS}
     returns = {agent: [] for agent in AGENTS}
-    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=ENV_ID)  # run folder, progress.csv, lines
+    run = runlog.UpdateLog(SCRIPT, cfg, LOGGED, task=ENV_ID, unit="episode")  # progress.csv
 
     # Ctrl-C ends the loop; model.pt holds both tables as training left them (from_numpy shares
     # each array's memory: the tensors saved at the end are the tables then)
@@ -286,7 +286,7 @@ def train(cfg: Config):
                             f"{agent}_q_error": q_error(Q, q_star, optimal)})
             # Sarsa's Q is the value of its epsilon-greedy policy, random steps off the edge
             # included, not Q*: on the optimal path its error stays; Q-learning's goes to 0
-            run.global_step = episode  # the log's step is the episode (the line's steps/s too)
+            run.global_step = episode  # the log's step is the episode, and the line says so
             run.update({}, **row)
     env.close()
     paths = {agent: greedy_path(Q, P, start) for agent, Q in tables.items()}

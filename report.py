@@ -86,7 +86,7 @@ def draw_logged(run, pictures):
 def interrupted_at(run, step, then, when=""):
     """The last line after a Ctrl-C: the step (and `when`), the files the run folder holds,
     what next."""
-    print(f"\ninterrupted at step {step}{when}: {run.dir} holds "
+    print(f"\ninterrupted at {getattr(run, 'unit', 'step')} {step}{when}: {run.dir} holds "
           f"{', '.join(sorted(f.name for f in run.dir.iterdir()))} "
           f"({then}: python {run.script}.py --eval {run.dir})", flush=True)
 

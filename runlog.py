@@ -145,10 +145,12 @@ class UpdateLog:
     arrays, the states visited). `logged`: the script's declaration of what each update logs,
     {column: (format on the progress line or None: only in the CSV, what it is (the pictures'
     label)[, its TensorBoard tag])}; a value of
-    None is "not measured at this update" (nan in the CSV, left out of the line)."""
+    None is "not measured at this update" (nan in the CSV, left out of the line). `unit`: what
+    global_step counts, named on the progress line ("episode 40  120 episodes/s" where a
+    tabular script logs once an episode)."""
 
-    def __init__(self, script, cfg, logged, task=None):
-        self.script, self.cfg, self.logged = script, cfg, logged
+    def __init__(self, script, cfg, logged, task=None, unit="step"):
+        self.script, self.cfg, self.logged, self.unit = script, cfg, logged, unit
         self.labels, self.tags = labels_and_tags(logged)
         self.window = getattr(cfg, "solved_window", None)  # none: no episodes to average
         self.start_time = time.time()
@@ -206,7 +208,8 @@ class UpdateLog:
             numbers = "  ".join(f"{key} {shown[key]:{spec[0]}}" for key, spec in
                                 self.logged.items() if spec[0] and shown[key] is not None)
             recent = f"return({self.window}) {self.recent_return():6.1f}  " if self.window else ""
-            print(f"step {self.global_step:>7}  {self.global_step / elapsed:6.0f} steps/s  "
+            print(f"{self.unit} {self.global_step:>7}  {self.global_step / elapsed:6.0f} "
+                  f"{self.unit}s/s  "
                   f"{recent}{numbers}  {elapsed:.1f}s", flush=True)
 
     def row(self, **columns):

@@ -158,8 +158,9 @@ def test_ctrl_c_or_sigterm_is_one_line_and_keeps_its_files(script, how, code, tm
     if how.get("background") and script.__name__ != "ppo_cartpole":  # the tools' behaviour
         pytest.skip("SIGINT re-enabled by cli.clear_exit for every script: one script shows it")
     flags = as_flags({**script.SMOKE, "print_every": 1})
+    first = "episode" if script.__name__ == "q_learning_cliffwalking" else "step"  # its log's step
     got, out, err = interrupt(f"{script.__name__}.py", *flags, "--run-dir", tmp_path,
-                              after="step", **how)
+                              after=first, **how)
     assert got == code, (out, err)
     assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
     assert "interrupted" in out + err, (out, err)
@@ -206,6 +207,8 @@ def test_smoke_run_in_chinese_prints_no_english_sentence(script, tmp_path, capsy
     assert p.returncode == 0, p.stderr
     assert "运行目录" in p.stdout and not english_sentences(p.stdout + p.stderr, names), (
         english_sentences(p.stdout + p.stderr, names))
+    stages = re.findall(r"\bphase\b|\b(?:sft|rm|ppo|dpo|grpo|rft|more_labels)\b", p.stdout)
+    assert not stages, f"a stage named in English: {stages}"  # 阶段 监督学习, GRPO, ...
     episodes = [] if "eval_episodes" in getattr(script.Config, "UNUSED_FLAGS", ()) else [
         "--eval-episodes", "1"]
     for args in (["--eval", tmp_path / "runs" / "latest", *episodes], ["--print-every", "0"]):

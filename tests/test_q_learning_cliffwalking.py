@@ -231,3 +231,19 @@ def test_model_pt_holds_both_tables_as_training_left_them(default_run):
     for agent in ("sarsa", "q_learning"):
         assert np.array_equal(saved[agent].numpy(), default_run["tables"][agent]), agent
     assert saved["config"]["total_episodes"] == 500
+
+
+@pytest.mark.quick
+def test_the_progress_line_counts_episodes(tmp_path, capsys):
+    """The log's step is the episode here, and the progress line says so: `episode 10  ...
+    episodes/s`, not steps (in Chinese: 第 10 个回合  每秒 ... 个回合)."""
+    import help_zh
+
+    tabular.train(tabular.Config(run_dir=str(tmp_path), curves=False, gifs=False,
+                                 total_episodes=20, print_every=10))
+    lines = [line for line in capsys.readouterr().out.splitlines() if "/s" in line]
+    assert [line.split()[:2] for line in lines] == [["episode", "1"], ["episode", "10"],
+                                                   ["episode", "20"]], lines
+    assert all(line.split()[3] == "episodes/s" for line in lines), lines
+    chinese = help_zh.translate(lines[-1], help_zh.catalogue())
+    assert chinese.startswith("第      20 个回合  每秒") and "个回合  sarsa_recent" in chinese, chinese
