@@ -12,11 +12,11 @@ tokens; DPO on the same pairs. Each line's PPO counterpart: docs/ppo_to_rlhf.md.
 
 中文导读：基于人类反馈的强化学习（RLHF，InstructGPT 的三步），在一个会做加法的小 Transformer 上跑通（这里一个字符就是一个 token）。
 先做监督学习（30% 的标签把进位弄错了，模型只是有时答对）；然后让模型对每个题目写 K 个回答，由一个
-“评审”按隐藏的分数（答案里对的字符所占的比例）排序，其中一部分成对的比较被故意翻转，就像人的标注会出错；
-策略从来看不到这个分数。用这些成对偏好训练奖励模型（同一个 Transformer 换成标量输出头，Bradley-Terry
+“评审”按隐藏的分数（答案里对的字符所占的比例）排序，其中一部分偏好对被故意翻转，就像人的标注会出错；
+策略从来看不到这个分数。用这些偏好对训练奖励模型（同一个 Transformer 换成标量输出头，Bradley-Terry
 损失）；再用 PPO 训练策略：每个字符的奖励是 −β 乘以该字符上策略与冻结的监督模型之间的 KL 项，最后一个字符
 再加上奖励模型的打分；优势用 GAE 在字符上计算，价值网络（评论员，critic）从奖励模型初始化。最后，用同样的
-成对偏好直接做 DPO：不要奖励模型，也不采样。对照阅读见 docs/ppo_to_rlhf.zh-CN.md。
+偏好对直接做 DPO：不要奖励模型，也不采样。对照阅读见 docs/ppo_to_rlhf.zh-CN.md。
 """
 
 import copy

@@ -41,6 +41,12 @@ GLOSSARY = {
     "隐式奖励": ("隐含奖励",),
     "标准误差": (),  # not 标准误 alone: checked below, as it is a part of 标准误差
     "监督学习": ("监督训练", "有监督训练"),
+    "奖励模型": ("回报模型",),
+    "偏好对": ("成对比较", "成对的比较"),
+    "评审": ("裁判",),
+    "过度优化": ("过优化", "奖励黑客", "钻空子", "钻了空子"),
+    "参考策略": ("参考模型",),
+    "拒绝采样微调": ("拒绝抽样",),
 }
 GRPO_TEXTS = ("docs/ppo_to_grpo.zh-CN.md", "grpo_addition.py")  # verifier and prompt live here
 
