@@ -14,7 +14,7 @@ finish_path(last_val) -> common.gae, buf.get -> batch_of. The loop in train():
              (--update minibatch: ppo_cartpole.py's epochs of shuffled minibatches)
     evaluate the mean action mu(s), clipped, after the update reaching each eval_every steps
 
-    python ppo_reacher.py                       # 1M steps: ~25 minutes on a busy 2-core CPU
+    python ppo_reacher.py                       # 1M steps: 7 to 26 minutes on a 2-core CPU
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
 Unlike 002 (docs/why.md): observations are normalised (--norm-obs); orthogonal init (the PPO
