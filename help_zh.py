@@ -2,7 +2,8 @@
 a Chinese line under each flag's English help, read from locale/flags.zh-CN.md, and the
 script's 中文导读 under its English description. The output in Chinese: `--lang zh` (or a
 Chinese locale) prints each line the code prints in English in its Chinese from
-locale/output.zh-CN.md, so the code keeps its English sentences. cli.parse_config asks it;
+locale/output.zh-CN.md, so the code keeps its English sentences, and plots.py draws the
+pictures' words in Chinese from the same file (output_entries). cli.parse_config asks it;
 nothing here knows a script."""
 
 import argparse
@@ -165,6 +166,12 @@ HAN = re.compile(r"[\u4e00-\u9fff]")  # a Chinese character
 PUNCT = re.compile(r"[\u3000-\u303f\uff00-\uffef]")  # full-width punctuation
 
 
+def wrapped(text, width):
+    """`text` (Chinese) in lines of at most `width` columns, joined by newlines (_wrap_wide):
+    plots.py wraps a translated axis label so."""
+    return "\n".join(_wrap_wide(text, width))
+
+
 def _wrap_wide(text, width):
     """`text` in lines of at most `width` columns, broken between words or Chinese characters;
     lines in the source are joined as Chinese is written (_join)."""
@@ -189,7 +196,9 @@ def _wrap_wide(text, width):
 def catalogue(path=OUTPUT_ZH):
     """[(the English line as a pattern, its Chinese)] from `path`'s pairs of lines `en: ...`,
     `zh: ...`; {name} in the English stands for any text, put where the Chinese has {name}.
-    The longest English first: a line matches the most specific entry."""
+    An English without {name} first (a line that is exactly it takes it: a picture's "policy
+    steps" is not "policy {answers}"), then the longest: a line matches the most specific
+    entry."""
     pairs, english = [], None
     for line in path.read_text(encoding="utf-8").splitlines():
         if line.startswith("en: "):
@@ -197,7 +206,7 @@ def catalogue(path=OUTPUT_ZH):
         elif line.startswith("zh: ") and english is not None:
             pairs.append((pattern(english), line[4:]))
             english = None
-    return sorted(pairs, key=lambda pair: -len(pair[0].pattern))
+    return sorted(pairs, key=lambda pair: (bool(pair[0].groupindex), -len(pair[0].pattern)))
 
 
 def pattern(english):
@@ -254,3 +263,10 @@ def print_in_chinese():
         stream = getattr(sys, name)
         if not isinstance(stream, Translated):
             setattr(sys, name, Translated(stream, entries))
+
+
+def output_entries():
+    """The catalogue the output is printed through once print_in_chinese has put it in place
+    (--lang zh, or a Chinese locale), else None (English). plots.py asks it: where it is not
+    None, the pictures are drawn in Chinese too, from the same catalogue."""
+    return sys.stdout.entries if isinstance(sys.stdout, Translated) else None
