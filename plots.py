@@ -8,12 +8,16 @@ line that ends where the run stopped, their mean (thick) where all of them ran.
     python plots.py runs/<script>__* --out mine.png    # the runs of one script
     python plots.py --maps runs/*                      # the runs that keep maps -> maps.png
 
-matplotlib is imported only here, with its Agg backend (no display needed); labels are
-ASCII (not every machine has CJK fonts). to_tensorboard writes the CSV logs as TensorBoard
-scalars under CleanRL's tag names, so that our runs and CleanRL's overlay.
+matplotlib is imported only here, with its Agg backend (no display needed). The code writes
+the labels in English; under --lang zh (a Chinese locale too) a run's pictures are saved with
+their words in Chinese, from locale/output.zh-CN.md, where a CJK font is found (in_chinese:
+CJK_FONTS, then the optional package mplfonts), else English, and one line says so.
+to_tensorboard writes the CSV logs as TensorBoard scalars under CleanRL's tag names, so that
+our runs and CleanRL's overlay.
 """
 
 import argparse
+import contextlib
 import csv
 import importlib.util
 import sys
@@ -21,6 +25,8 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+
+import help_zh
 
 
 def read_csv(path):
@@ -120,12 +126,95 @@ def save_whole(plt, fig, path, dpi, tight=True):
     tight: fitted to what it holds, nothing cut at the edges (matplotlib draws it twice)."""
     tmp = Path(f"{path}.tmp.png")
     try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight" if tight else None)
+        with in_chinese(fig):  # English, unless the output is in Chinese (--lang zh)
+            fig.savefig(tmp, dpi=dpi, bbox_inches="tight" if tight else None)
         tmp.replace(path)
     finally:
         plt.close(fig)
         tmp.unlink(missing_ok=True)
     return path
+
+
+# ---- the pictures in Chinese (--lang zh) ---------------------------------------------------
+
+# The CJK fonts looked for among those matplotlib knows (the system's: fonts-noto-cjk,
+# fonts-wqy-zenhei, Windows' and macOS' own), the first found drawn; then mplfonts' Noto Sans
+# CJK SC (MPLFONTS: the optional package's font file, in its folder), registered with
+# matplotlib. None found: the pictures stay English, and NO_CJK_FONT says so once.
+CJK_FONTS = ("Noto Sans CJK SC", "Noto Sans SC", "Source Han Sans SC", "WenQuanYi Zen Hei",
+             "WenQuanYi Micro Hei", "SimHei", "Microsoft YaHei", "PingFang SC", "Heiti SC")
+MPLFONTS = ("mplfonts", "fonts/NotoSansCJKsc-Regular.otf")
+NO_CJK_FONT = ("note: the pictures stay English: no CJK font found (looked for {fonts}, then "
+               "the mplfonts package); pip install mplfonts, or a system CJK font such as "
+               "fonts-noto-cjk, draws them in Chinese")
+SAID = set()  # the lines said once per run (NO_CJK_FONT)
+WRAP = 34  # characters (columns in Chinese) per line of a long axis label
+
+
+def in_chinese(fig):
+    """The context `fig` is saved in: as it is, unless the output is in Chinese (--lang zh, or
+    a Chinese locale: help_zh.output_entries). Then, where a CJK font is found (cjk_font),
+    every text of the figure (titles, axis labels, legends, the colour bar's, a panel's
+    text) in its Chinese from locale/output.zh-CN.md, and that font behind the figure's own
+    for the characters they lack (the numbers and names keep their font); without one, the
+    pictures stay English and one line says so, once."""
+    entries = help_zh.output_entries()
+    if entries is None:
+        return contextlib.nullcontext()
+    font = cjk_font()
+    if font is None:
+        if NO_CJK_FONT not in SAID:
+            SAID.add(NO_CJK_FONT)
+            print(NO_CJK_FONT.format(fonts=", ".join(CJK_FONTS)), file=sys.stderr, flush=True)
+        return contextlib.nullcontext()
+    import matplotlib
+    from matplotlib.text import Text
+
+    for text in fig.findobj(Text):
+        text.set_text(chinese(text.get_text(), entries))
+        text.set_fontfamily([*text.get_fontfamily(), font])
+    # and the tick labels, made as the figure is drawn
+    return matplotlib.rc_context({"font.family": [*matplotlib.rcParams["font.family"], font]})
+
+
+def chinese(english, entries):
+    """A picture's text in Chinese (help_zh.translate) where the catalogue has it: an axis
+    label wrapped by textwrap is looked up as one line and wrapped again; a text of several
+    lines that is not (a panel of sampled answers), line by line."""
+    lines = english.split("\n")
+    whole = lines[0]
+    for line in lines[1:]:  # textwrap breaks after a hyphen (cross-entropy) or at a space
+        whole += ("" if whole.endswith("-") and line[:1].isalpha() else " ") + line
+    found = help_zh.translate(whole, entries)
+    if found == whole:
+        return "\n".join(help_zh.translate(line, entries) for line in lines)
+    return help_zh.wrapped(found, WRAP) if len(lines) > 1 else found
+
+
+def cjk_font():
+    """The name of the CJK font the Chinese pictures are drawn with, or None: the first of
+    CJK_FONTS that matplotlib knows, else mplfonts' font file (registered here)."""
+    from matplotlib import font_manager
+
+    known = {font.name for font in font_manager.fontManager.ttflist}
+    found = next((name for name in CJK_FONTS if name in known), None)
+    path = mplfonts_font() if found is None else None
+    if path is not None:
+        font_manager.fontManager.addfont(str(path))
+        found = font_manager.FontProperties(fname=str(path)).get_name()
+    return found
+
+
+def mplfonts_font():
+    """The path of the CJK font file the package mplfonts ships, where it is installed, else
+    None. Found without importing mplfonts (its import needs its own dependencies)."""
+    try:
+        spec = importlib.util.find_spec(MPLFONTS[0])
+    except (ImportError, ValueError):  # ValueError: sys.modules holds None for it
+        return None
+    folders = (spec.submodule_search_locations or []) if spec else []
+    return next((Path(f) / MPLFONTS[1] for f in folders if (Path(f) / MPLFONTS[1]).is_file()),
+                None)
 
 
 def episode_returns(window, solved_return=None, solved_step=None):
@@ -188,7 +277,7 @@ def axis_label(columns, labels, given):
     the script names what they share); wrapped to fit beside the axis."""
     if given is None and len(columns) == 1:
         given = labels.get(columns[0], columns[0])
-    return textwrap.fill(given, 34) if given else ""
+    return textwrap.fill(given, WRAP) if given else ""
 
 
 def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_log=True,
@@ -531,7 +620,7 @@ def compare_figure(run_dirs):
             ax.plot([], [], color=f"C{color}", lw=2, label=label)
         ax.set_title(env, fontsize=10)
         ax.set_xlabel("env steps")
-        ax.set_ylabel(textwrap.fill(what, 34), fontsize=8)
+        ax.set_ylabel(textwrap.fill(what, WRAP), fontsize=8)
         ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     return fig

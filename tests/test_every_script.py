@@ -182,17 +182,18 @@ def test_ctrl_c_or_sigterm_is_one_line_and_keeps_its_files(script, how, code, tm
 
 def english_sentences(text, names=()):
     """The runs of three or more English words in `text`, once names, numbers, paths and flags
-    are taken out: `names`, file and folder paths, --flags, identifiers (loss_pi, pass@1,
-    CartPole-v1), words in backquotes or in capitals (PPO, DPO)."""
-    found = []
-    for line in text.splitlines():
-        line = re.sub(r"`[^`]*`|\S*[/\\]\S*|\S+\.(?:py|pt|png|csv|gif|npz|md)\b|--[\w-]+", " ",
-                      line)
-        line = re.sub(r"\b(?:%s)\b" % "|".join(map(re.escape, names)) if names else "$^", " ",
-                      line)
-        line = re.sub(r"[\w@*'-]*[_\d@][\w@*'-]*|\b[A-Z][A-Z-]+\b", " ", line)
-        found += re.findall(r"[A-Za-z]{2,}(?:[ ,;:()]+[A-Za-z]{2,}){2,}", line)
-    return found
+    are taken out (without_names)."""
+    return [run for line in text.splitlines() for run in re.findall(
+        r"[A-Za-z]{2,}(?:[ ,;:()]+[A-Za-z]{2,}){2,}", without_names(line, names))]
+
+
+def without_names(line, names=()):
+    """`line` less its names, numbers, paths and flags: `names`, file and folder paths, --flags,
+    identifiers (loss_pi, pass@1, CartPole-v1), words in backquotes or in capitals (PPO, DPO).
+    tests/test_pictures_zh.py holds a picture's texts to it too."""
+    line = re.sub(r"`[^`]*`|\S*[/\\]\S*|\S+\.(?:py|pt|png|csv|gif|npz|md)\b|--[\w-]+", " ", line)
+    line = re.sub(r"\b(?:%s)\b" % "|".join(map(re.escape, names)) if names else "$^", " ", line)
+    return re.sub(r"[\w@*'-]*[_\d@][\w@*'-]*|\b[A-Z][A-Z-]+\b", " ", line)
 
 
 def test_smoke_run_in_chinese_prints_no_english_sentence(script, tmp_path, capsys):
