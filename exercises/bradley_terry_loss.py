@@ -9,7 +9,7 @@ gap is learned: r is free up to a constant per prompt.
     python exercises/check.py bradley_terry_loss
 The reference answer: rlhf_addition.bradley_terry_loss (rlhf_addition.py).
 
-练习：奖励模型的损失，成对偏好上的 Bradley-Terry 损失（Ouyang 等 2022 的式 1；Christiano 等 2017
+练习：奖励模型的损失，偏好对上的 Bradley-Terry 损失（Ouyang 等 2022 的式 1；Christiano 等 2017
 的第 2.2.3 节）。评审在同一个题目的两个回答里更喜欢 y_w 而不是 y_l；奖励模型用两个打分的差给出这件事
 的概率，P(y_w 被选中) = sigmoid(r(x, y_w) - r(x, y_l))，训练目标是让评审的选择变得可能。只有分差是
 学到的：对每个题目，r 可以整体加一个常数。参考答案：rlhf_addition.bradley_terry_loss。

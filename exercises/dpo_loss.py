@@ -11,7 +11,7 @@ over each answer's own tokens (answer_logp, exercise 25).
 The reference answer: rlhf_addition.dpo_loss (rlhf_addition.py).
 
 练习：DPO 的损失（Rafailov 等 2023 的式 7）：把整个回答的 β log(π / π_ref) 当作奖励的
-Bradley-Terry 损失。DPO 不要奖励模型，也不采样，直接在成对偏好上训练策略。它给回答的奖励是隐式奖励：
+Bradley-Terry 损失。DPO 不要奖励模型，也不采样，直接在偏好对上训练策略。它给回答的奖励是隐式奖励：
 β 乘以策略让这个回答比冻结的监督模型 π_ref 更可能多少。损失就是奖励模型的损失，只是 r 换成了这个
 奖励。对数概率已经在每个回答自己的 token 上求了和（answer_logp，练习 25）。
 参考答案：rlhf_addition.dpo_loss。

@@ -57,7 +57,7 @@ def mistakes(logp_w, logp_l, ref_w, ref_l, beta):
                 "log π - log π_ref 写成了 log π_ref - log π）：分差的符号反了"),
              -logsigmoid(-beta * gap).mean()),
             (tr("the reference left out: beta * (log pi(y_w) - log pi(y_l)), where each answer's "
-                "log pi is measured against pi_ref's", "漏了参考模型：写成了 β * (log π(y_w) - "
+                "log pi is measured against pi_ref's", "漏了参考策略：写成了 β * (log π(y_w) - "
                 "log π(y_l))，每个回答的 log π 都要减去 π_ref 的"),
              -logsigmoid(beta * (logp_w.detach() - logp_l.detach())).mean()),
             (tr("beta outside: -beta * log sigmoid(gap), where beta scales the gap inside the "
