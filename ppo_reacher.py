@@ -24,7 +24,8 @@ Reacher charges its control cost on it); a time limit bootstraps V (gymnasium's 
 中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，和教程 002
 所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，
 对数概率在动作的各维上求和；更新即教程 002 的 update()：整批数据上最多 train_pi_iters 次策略
-更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络更新。
+更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络更新。教程 002 的
+buf.store、finish_path、buf.get 分别对应 RolloutBuffer.store、common.gae、batch_of。
 """
 
 import copy
