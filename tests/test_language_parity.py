@@ -380,3 +380,24 @@ def test_a_copy_of_a_script_takes_the_chinese_lines_of_the_english_it_kept(tmp_p
     for field in ("env_id", "hidden", "seed", "eval_episodes", "clip_coef", "solved_window"):
         assert copy[field] == original[field], field
     assert "gamma" not in copy
+
+
+def test_every_ctrl_c_line_of_report_is_in_chinese():
+    """The last line of a Ctrl-C at each point report.py knows (during training, after it,
+    while the GIFs are recorded) is Chinese from the catalogue, its `when` and `then` too:
+    those lines come only from a Ctrl-C at the right moment, which the smoke runs rarely hit."""
+    import ast
+    from test_every_script import english_sentences
+    tree = ast.parse((ROOT / "report.py").read_text(encoding="utf-8"))
+    calls = [node for node in ast.walk(tree) if isinstance(node, ast.Call)
+             and getattr(node.func, "id", None) == "interrupted_at"]
+    assert len(calls) >= 4
+    entries = help_zh.catalogue()
+    for call in calls:
+        then = call.args[2].value
+        when = "".join(part.value for part in ast.walk(call.args[3])
+                       if isinstance(part, ast.Constant)) if len(call.args) > 3 else ""
+        line = (f"interrupted at step 120{when}: runs/x holds model.pt, progress.csv "
+                f"({then}: python ppo_cartpole.py --eval runs/x)")
+        chinese = help_zh.translate(line, entries)
+        assert chinese != line and not english_sentences(chinese), (line, chinese)
