@@ -282,7 +282,7 @@ def axis_label(columns, labels, given):
 
 def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_log=True,
           log=False, ylim=None, between=None, hlines=(), steps=False, dashed=(), within=None,
-          where=None, x="global_step", x_of=None, xlabel="env steps"):
+          where=None, x="global_step", x_of=None, xlabel="env steps", legend="upper left"):
     """Panel: `columns` of the run's table over env steps, labelled as declared; `ylabel`:
     what they measure (one column: its declared label unless given; several: name the one
     quantity they share); `right`: a second quantity's columns on a right-hand axis
@@ -296,7 +296,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     (first, last) env step, both drawn; `where`: (column, value), the rows whose column holds
     value (a stage's name). Against another column: `x`, each row a point, joined in the
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
-    `xlabel`: what x is."""
+    `xlabel`: what x is; `legend`: where the legend goes in the axis, or "above" it (in a
+    row, over no line: a panel without a title)."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
         needed = (*columns, *right, x, *([where[0]] if where else []))
@@ -341,6 +342,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
         ax.set_ylabel(axis_label(columns, labels, ylabel), fontsize=8)
         if ylim is not None:
             ax.set_ylim(*ylim)
+        few_ticks(ax, ax.xaxis)
+        few_ticks(ax, ax.yaxis)
         if title:
             ax.set_title(title, fontsize=9)
         top = ax
@@ -349,11 +352,44 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
             draw_columns(top, right, [f"C{i + len(columns) + 1}" for i in range(len(right))])
             top.set_yscale("log" if right_log else "linear")
             top.set_ylabel(axis_label(right, labels, right_ylabel), fontsize=8)
+            few_ticks(top, top.yaxis)
         handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
-        if handles:  # on the axis drawn last, above every line
-            top.legend(handles=handles, fontsize=7, loc="upper left")
+        if handles and legend == "above":  # in a row over the axis, covering no line
+            top.legend(handles=handles, fontsize=7, loc="lower left", bbox_to_anchor=(0, 1),
+                       ncol=len(handles), frameon=False, borderaxespad=0.2)
+        elif handles:  # on the axis drawn last, above every line
+            top.legend(handles=handles, fontsize=7, loc=legend)
     fill.right_axis = bool(right)  # figure() leaves room for its labels
     return 1, fill
+
+
+def few_ticks(ax, axis):
+    """As many tick labels on `axis` (ax's x or y axis) as its length holds without their
+    running together: about one an inch across (env steps run to 6 digits), one per 0.4
+    inch up. A log axis over less than 3 decades: its ticks at 1, 2 and 5 (1 and 3 over 2
+    decades or more) times a power of ten, written as plain numbers, the others unlabelled."""
+    from matplotlib import ticker
+
+    box = ax.get_position()
+    across = axis is ax.xaxis
+    inches = (box.width * ax.figure.get_figwidth() if across
+              else box.height * ax.figure.get_figheight())
+    most = max(2, int(inches / (1.0 if across else 0.4)))
+    if axis.get_scale() == "linear" and across:  # up, matplotlib's own spacing holds them
+        axis.set_major_locator(ticker.MaxNLocator(nbins=most, steps=[1, 2, 2.5, 5, 10]))
+        return
+    if axis.get_scale() != "log":
+        return
+    lo, hi = ax.get_xlim() if across else ax.get_ylim()
+    if not (0 < lo < hi and np.isfinite(hi)):
+        return
+    decades = np.log10(hi / lo)
+    if decades >= 3:  # matplotlib's powers of ten
+        return
+    subs = (1.0, 3.0) if decades >= 2 or most < 4 else (1.0, 2.0, 5.0)
+    axis.set_major_locator(ticker.LogLocator(subs=subs, numticks=99))
+    axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(ticker.NullFormatter())
 
 
 def spread(prefix, title, hlines=(), ylabel=None):

@@ -266,13 +266,13 @@ SMOKE = dict(total_timesteps=2048, stop_when_solved=False, eval_episodes=2)  # t
 
 
 def pictures(cfg):
-    """curve.png: pi's entropy and the KL, beta beside them, below the returns; inside.png
+    """curve.png: pi's entropy and the KL, then beta, rows below the returns; inside.png
     (docs/inside.md): the KL against the band where beta stays, and beta, each rise and fall
     marked."""
     lo, hi, k = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance, cfg.kl_tolerance
     return dict(curve=[[plots.lines("entropy", ylabel="entropy (nats)", right=("kl",),
-                                    right_ylabel="KL(pi_old || pi)"),
-                        plots.lines("beta", log=True, ylabel="beta")]], inside=[[
+                                    right_ylabel="KL(pi_old || pi)", legend="above")],
+                       [plots.lines("beta", log=True, ylabel="beta", legend="above")]], inside=[[
         plots.lines("kl", log=True, between=(lo, hi, "beta stays"),
                     title=f"KL against [d_targ / {k:g}, d_targ x {k:g}], d_targ = {cfg.d_targ:g}"),
         plots.lines("beta", log=True, steps=True, title="beta: doubled after a KL too high, "
