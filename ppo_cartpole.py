@@ -278,7 +278,7 @@ def pictures(cfg):
     against [1 - eps, 1 + eps], the share of the batch without gradient, r at three updates."""
     band = (1 - cfg.clip_coef, 1 + cfg.clip_coef)
     return dict(curve=[[plots.lines("entropy", right=("approx_kl",))]], inside=[
-        [plots.spread("ratio", "r = pi/pi_old after each update; dashed: 1 -+ eps", band,
+        [plots.spread("ratio", "r = pi/pi_old after each update; dashed: 1 +- eps", band,
                       ylabel="r = pi / pi_old"),
          plots.lines("clipfrac", "clipfrac_after", "zero_grad_frac", title="share of the batch",
                      ylabel="share of the batch's samples")],
