@@ -234,15 +234,15 @@ def grid(maps, blank):
     return len(maps), fill
 
 
-def pictures(tables, v_star, paths, optimal, start):
-    """curve.png: the online returns, smoothed; inside.png: each table's V = max_a Q and greedy
+def pictures(tables, v_star, paths, optimal, start, window):
+    """curve.png: the online returns, each the mean of the last `window` episodes; inside.png: each table's V = max_a Q and greedy
     path beside V* and the optimal path, then |Q - Q*| and the greedy paths' returns."""
     maps = [(f"{name}: greedy path", tables[a].max(1), paths[a][0]) for a, name in AGENTS.items()]
     blank = np.arange(len(v_star)) > start  # 37-46, the cliff, and 47, the goal: after the start
     best, x = (v_star[start],), dict(xlabel="episode")  # the optimal return, dashed
     return dict(curve=[[plots.lines("sarsa_recent", "q_learning_recent", ylim=(-100, 0), **x,
                                     hlines=best, title="online return, mean of the last "
-                                    "--window episodes; dashed: V*(start)",
+                                    f"{window} episodes; dashed: V*(start)",
                                     ylabel="online return, recent mean")]],
                 inside=[[grid([*maps, ("V* and the optimal path", v_star, optimal)], blank)],
                         [plots.lines("sarsa_q_error", "q_learning_q_error", **x,
@@ -292,7 +292,8 @@ def train(cfg: Config):
     paths = {agent: greedy_path(Q, P, start) for agent, Q in tables.items()}
     result = dict(run_dir=run.dir, interrupted=run.interrupted, tables=tables, q_star=q_star,
                   v_star=v_star, start=start, returns=returns, paths=paths, optimal=optimal)
-    report.draw_logged(run, pictures(tables, v_star, paths, optimal, start))  # Ctrl-C too
+    report.draw_logged(run, pictures(tables, v_star, paths, optimal, start,  # Ctrl-C too
+                                     cfg.window))
     if run.interrupted:  # the line draw_logged printed last says where the files are
         return result
     for agent, name in AGENTS.items():
