@@ -454,15 +454,22 @@ def main(argv=None):
         known = {k: v for k, v in saved["config"].items() if k in Config.__dataclass_fields__}
         c = Config(**{**known, "eval": None, "gif": None})  # its task, its split
         _, held_out = split_pairs(c.digits, c.eval_prompts, np.random.default_rng(c.seed))
+        log = (Path(cfg.eval) if Path(cfg.eval).is_dir() else Path(cfg.eval).parent) / \
+            "progress.csv"  # the stage the run reached: a run stopped before PPO saved its
+        phase = log.read_text().rsplit("\n", 2)[-2].split(",")[1] if log.exists() else "ppo"
+        if phase in ("sft", "rm"):  # supervised model as its policy: say so, and name it so
+            print(f"the run stopped in phase {phase}, before PPO: its policy is the supervised "
+                  "model", flush=True)
         for key in [k for k in ("policy", "dpo") if k in saved]:  # PPO's policy, DPO's
             model, _ = checkpoints.load_model(cfg.eval, SCRIPT, key, lambda _: TinyGPT(
                 c.n_layer, c.d_model, c.n_head, sum(lengths(c.digits))))  # prompt + answer
             seqs = sample(model, prompt_ids(held_out[:6], c.digits).repeat_interleave(6, 0),
                           lengths(c.digits)[1], torch.Generator().manual_seed(c.eval_seed))
+            name = "supervised" if key == "policy" and phase in ("sft", "rm") else key
             for row in seqs.view(6, 6, -1):  # 6 answers to each of 6 sums, the same draws
-                print(key, " ".join(f"{decode(s)}({v:.2f})"
-                                    for s, v in zip(row.tolist(), scores_of(row, c.digits))))
-            print(f"{key}: held-out ({len(held_out)} prompts) true score %.3f, accuracy %.3f  "
+                print(name, " ".join(f"{decode(s)}({v:.2f})"
+                                     for s, v in zip(row.tolist(), scores_of(row, c.digits))))
+            print(f"{name}: held-out ({len(held_out)} prompts) true score %.3f, accuracy %.3f  "
                   "((n): the judge's hidden score)" % evaluate(model, held_out, c), flush=True)
 
 

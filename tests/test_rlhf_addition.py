@@ -190,7 +190,9 @@ def test_bad_flags_are_one_line_and_exit_2(args, needle, tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_ctrl_c_keeps_the_model(tmp_path):
+def test_ctrl_c_keeps_the_model(tmp_path, capsys):
+    """A Ctrl-C in the supervised stage keeps model.pt; --eval of it calls its policy the
+    supervised model (no PPO ran), in either language."""
     from conftest import interrupt
 
     args = [f"--{k.replace('_', '-')}={v}" for k, v in TINY.items()]
@@ -201,6 +203,11 @@ def test_ctrl_c_keeps_the_model(tmp_path):
     assert (run / "model.pt").exists() and not list(run.glob("*.tmp*"))
     last = out.strip().splitlines()[-1]  # the same last line as every script's
     assert last.startswith("interrupted at step") and "its model.pt, as training left it" in last
+    shown = run_main("rlhf_addition.py", "--eval", run, capsys=capsys).stdout
+    assert "the run stopped in phase sft, before PPO" in shown and "\npolicy" not in shown
+    assert "\nsupervised: held-out" in shown, shown
+    shown = run_main("rlhf_addition.py", "--eval", run, "--lang", "zh", capsys=capsys).stdout
+    assert "还没到 PPO" in shown and "PPO 的策略" not in shown and "监督学习模型 " in shown, shown
 
 
 def test_the_pages_numbers_are_the_records():
