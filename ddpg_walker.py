@@ -235,8 +235,9 @@ def build(obs_dim, act_dim, low, high, cfg, device):
 # evaluations.csv's own columns, once: (progress-line format, picture label)
 LOGGED = dict(q_estimate=(None, "critic: Q(s, mu(s))"), q_states=(None, "states averaged"),
               discounted_return=(None, "what mu obtained: sum of gamma^k r from s"))
-PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="docs/inside.md",
-                                     ylabel="discounted return from s, mean over the states")]])
+PICTURES = dict(inside=[[plots.lines(  # docs/inside.md, "DDPG: overestimation"
+    "q_estimate", "discounted_return", ylabel="discounted return from s, mean over the states",
+    title="each evaluation: the critic's Q against the discounted return mu obtained")]])
 SHIPPED = Path(__file__).resolve().parent / "docs" / f"{SCRIPT}2d.pt"  # a 1M-step run's best
 SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,  # the tests':
              eval_every=150, eval_episodes=1, batch_size=64, hidden=64)  # seconds, every file
