@@ -20,6 +20,8 @@ import argparse
 import contextlib
 import csv
 import importlib.util
+import itertools
+import re
 import sys
 import textwrap
 from pathlib import Path
@@ -188,7 +190,31 @@ def chinese(english, entries):
     found = help_zh.translate(whole, entries)
     if found == whole:
         return "\n".join(help_zh.translate(line, entries) for line in lines)
-    return help_zh.wrapped(found, WRAP) if len(lines) > 1 else found
+    return "\n".join(evenly_wrapped(found, WRAP)) if len(lines) > 1 else found
+
+
+def evenly_wrapped(text, width):
+    """`text` (Chinese) in as few lines of at most `width` columns as help_zh.wrapped makes,
+    broken after a comma, semicolon or colon where its phrases fit so, the lines as even as
+    they go; else as even as wrapping them narrower makes them (no character alone on the
+    last line)."""
+    lines = help_zh.wrapped(text, width).split("\n")
+    if len(lines) < 2:
+        return lines
+    phrases = re.split(r"(?<=[，；：])", text)
+    best = None
+    for cuts in itertools.combinations(range(1, len(phrases)), len(lines) - 1):
+        parts = ["".join(phrases[a:b]).strip() for a, b in zip((0, *cuts), (*cuts, None))]
+        longest = max(help_zh.columns(part) for part in parts)
+        if longest <= width and (best is None or longest < best[0]):
+            best = (longest, parts)
+    if best is not None:
+        return best[1]
+    for narrower in range(-(-help_zh.columns(text) // len(lines)), width):
+        even = help_zh.wrapped(text, narrower).split("\n")
+        if len(even) == len(lines):
+            return even
+    return lines
 
 
 def cjk_font():
