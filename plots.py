@@ -538,6 +538,10 @@ def scatters(x, y, xlabel, ylabel):
     return 3, fill
 
 
+# maps_row's states visited: at most DOTS_DRAWN of them marked on a map, and what they are
+DOTS, DOTS_DRAWN = "white dots: states from the last batches", 800
+
+
 def maps_row(maps, title=""):
     """Panels: 2-D maps over two state variables (an env helper makes them): maps[when] for
     when in "untrained", "trained" holds "value" and "policy" (x: columns, y: rows); "true",
@@ -560,10 +564,14 @@ def maps_row(maps, title=""):
             ax.figure.colorbar(image, ax=ax, fraction=0.046)
             what = maps.get(f"{key}_label", "V(s)" if key == "value" else "policy")
             name = "true V^pi(s), Monte-Carlo" if when == "true" else f"{what}, {when}"
-            ax.set_title(f"{title + ': ' if title else ''}{name}", fontsize=8)
             visited = maps.get("visited")
-            if key == "value" and when in ("trained", "true") and visited is not None:
-                ax.plot(visited[:, 0], visited[:, 1], ",", color="white", alpha=0.5)
+            dots = (key == "value" and when in ("trained", "true") and visited is not None
+                    and len(visited) > 0)
+            ax.set_title(f"{title + ': ' if title else ''}{name}" + (f"\n{DOTS}" if dots else ""),
+                         fontsize=8)
+            if dots:  # at most DOTS_DRAWN, evenly through them, small and faint: the map
+                shown = visited[::-(-len(visited) // DOTS_DRAWN)]  # shows through the cloud
+                ax.plot(shown[:, 0], shown[:, 1], ".", ms=2, mew=0, color="white", alpha=0.4)
                 ax.set_xlim(extent[:2])
                 ax.set_ylim(extent[2:])
             ax.set_xlabel(maps.get("xlabel", ""), fontsize=7)
