@@ -322,7 +322,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     (first, last) env step, both drawn; `where`: (column, value), the rows whose column holds
     value (a stage's name). Against another column: `x`, each row a point, joined in the
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
-    `xlabel`: what x is; `legend`: where the legend goes in the axis, or "above" it (in a
+    `xlabel`: what x is; `log`: a log y axis, or "wide": one where the values drawn span a
+    factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`: where the legend goes in the axis, or "above" it (in a
     row, over no line: a panel without a title)."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
@@ -364,7 +365,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
         draw_columns(ax, columns, [f"C{i + 1}" for i in range(len(columns))])
         for level in hlines:
             ax.axhline(level, color="k", ls="--", lw=0.8)
-        ax.set(yscale="log" if log else "linear", xlabel=xlabel)
+        ax.set(yscale="log" if wide_enough(log, table, columns, rows) else "linear",
+               xlabel=xlabel)
         ax.set_ylabel(axis_label(columns, labels, ylabel), fontsize=8)
         if ylim is not None:
             ax.set_ylim(*ylim)
@@ -387,6 +389,16 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
             top.legend(handles=handles, fontsize=7, loc=legend)
     fill.right_axis = bool(right)  # figure() leaves room for its labels
     return 1, fill
+
+
+def wide_enough(log, table, columns, rows):
+    """Whether the panel's y axis is log-scaled: `log` True, or "wide" and the values of
+    `columns` in `rows` span a factor of 10 or more (all above 0)."""
+    if log != "wide":
+        return bool(log)
+    values = np.concatenate([np.asarray(table[c][rows], dtype=float) for c in columns])
+    values = values[np.isfinite(values)]
+    return bool(len(values) and values.min() > 0 and values.max() >= 10 * values.min())
 
 
 def few_ticks(ax, axis):

@@ -317,7 +317,7 @@ LOGGED = dict(q_estimate=(None, "critic: Q1(s, tanh(mean))"), q_states=(None, "s
 PICTURES = dict(inside=[[plots.lines("q_estimate", "discounted_return", title="each evaluation",
                                      ylabel="discounted return from s, mean over the states")],
                         [plots.lines("entropy", "target_entropy", ylabel="entropy of pi (nats)"),
-                         plots.lines("alpha", log=True)]])
+                         plots.lines("alpha", log="wide")]])
 SMOKE = dict(env_id="InvertedPendulum-v5", total_timesteps=300, start_steps=200,  # the tests':
              eval_every=150, eval_episodes=1, batch_size=64, hidden=64)  # seconds, every file
 
