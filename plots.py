@@ -308,7 +308,8 @@ def axis_label(columns, labels, given):
 
 def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_log=True,
           log=False, ylim=None, between=None, hlines=(), steps=False, dashed=(), within=None,
-          where=None, x="global_step", x_of=None, xlabel="env steps", legend="upper left"):
+          where=None, x="global_step", x_of=None, xlabel="env steps", legend="upper left",
+          coloured_by=None):
     """Panel: `columns` of the run's table over env steps, labelled as declared; `ylabel`:
     what they measure (one column: its declared label unless given; several: name the one
     quantity they share); `right`: a second quantity's columns on a right-hand axis
@@ -324,7 +325,9 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
     `xlabel`: what x is; `log`: a log y axis, or "wide": one where the values drawn span a
     factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`: where the legend goes in the axis, or "above" it (in a
-    row, over no line: a panel without a title)."""
+    row, over no line, the title above it); `coloured_by`: (column, label): each row a point,
+    not joined, coloured by that column (a colour bar, `label`, says how), a marker per
+    column (the legend's, in grey, says which)."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
         needed = (*columns, *right, x, *([where[0]] if where else []))
@@ -343,11 +346,22 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
         if between is not None:
             ax.axhspan(between[0], between[1], color="C2", alpha=0.2, label=between[2])
 
+        from matplotlib.ticker import MaxNLocator
+
+        coloured = []  # the points coloured_by draws, per column
+
         def draw_columns(ax, names, colors):
             for column, color in zip(names, colors):
                 y = table[column][rows]
                 at = np.isfinite(y)
                 if not at.any():  # not measured in these rows (another stage's number)
+                    continue
+                if coloured_by is not None:  # points only: a line in row order reads as noise
+                    by = np.asarray(table[coloured_by[0]][rows], dtype=float)
+                    coloured.append(ax.scatter(
+                        xs[at], y[at], c=by[at], cmap="viridis", vmin=np.nanmin(by),
+                        vmax=np.nanmax(by), s=16, marker=MARKERS[len(coloured) % len(MARKERS)],
+                        label=labels.get(column, column), zorder=2))
                     continue
                 sparse = (at.sum() < len(at) or x != "global_step") and not steps
                 on_top = column in dashed  # the others wide beneath it, to show at its gaps
@@ -381,12 +395,25 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
             top.set_yscale("log" if right_log else "linear")
             top.set_ylabel(axis_label(right, labels, right_ylabel), fontsize=8)
             few_ticks(top, top.yaxis)
+        if coloured:  # one scale for every column's points; room for a right-hand axis' labels
+            bar = ax.figure.colorbar(coloured[0], ax=list(dict.fromkeys((ax, top))),
+                                     fraction=0.04, pad=0.12 if right else 0.03)
+            bar.set_label(coloured_by[1], fontsize=7)
+            bar.ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # steps: whole numbers
         handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
-        if handles and legend == "above":  # in a row over the axis, covering no line
+        if handles and legend == "above":  # over the axis, covering no line; the title above it
+            points = sum(4 * len(h.get_label()) + 30 for h in handles)  # 7-point text
+            wide = 72 * ax.get_position().width * ax.figure.get_figwidth() > points
+            ncol = len(handles) if wide else 1  # else one under another
             top.legend(handles=handles, fontsize=7, loc="lower left", bbox_to_anchor=(0, 1),
-                       ncol=len(handles), frameon=False, borderaxespad=0.2)
+                       ncol=ncol, frameon=False, borderaxespad=0.2)
+            if title:
+                ax.set_title(title, fontsize=9, pad=6 + 10 * -(-len(handles) // ncol))
         elif handles:  # on the axis drawn last, above every line
-            top.legend(handles=handles, fontsize=7, loc=legend)
+            shown = top.legend(handles=handles, fontsize=7, loc=legend)
+            if coloured:  # the marker says which column; the colour is the colour bar's
+                for handle in shown.legend_handles:
+                    handle.set_color("0.4")
     fill.right_axis = bool(right)  # figure() leaves room for its labels
     return 1, fill
 
@@ -548,6 +575,9 @@ def scatters(x, y, xlabel, ylabel):
             ax.set_xlabel(xlabel, fontsize=8)
             ax.set_ylabel(ylabel, fontsize=8)
     return 3, fill
+
+
+MARKERS = "o^sD"  # lines(coloured_by=...): a column's points
 
 
 # maps_row's states visited: at most DOTS_DRAWN of them marked on a map, and what they are

@@ -418,16 +418,17 @@ def pictures(margins):
     """curve.png: a column per stage over its steps (its loss; its held-out checks), then PPO's
     batch (the learned reward against the true score) and its KL; inside.png: r's margins on
     held-out pairs (r is known up to a shift per prompt: only r(x, y_w) - r(x, y_l) means
-    something), PPO's answers over their KL."""
+    something), PPO's answers over their KL, a point per step coloured by the step."""
     losses = dict(sft="cross-entropy", rm="Bradley-Terry loss", ppo="PPO's clipped loss",
                   dpo="DPO's loss")
     stage = dict(xlabel="step")
     return dict(curve=[
         [plots.lines("loss", title=name, ylabel=what, where=("phase", name), **stage)
          for name, what in losses.items()],
-        [plots.lines("rm_accuracy", title="rm: held-out pairs", where=("phase", name), **stage)
+        [plots.lines("rm_accuracy", title="rm: held-out pairs\none measure, after training",
+                     where=("phase", name), **stage)
          if name == "rm" else plots.lines("held_true", right=("held_accuracy",), right_log=False,
-                                          title=f"{name}: held-out checks",
+                                          title=f"{name}: held-out checks", legend="above",
                                           where=("phase", name), **stage)
          for name in losses],
         [plots.lines("true_score", right=("rm_score",), right_log=False, where=("phase", "ppo"),
@@ -437,7 +438,7 @@ def pictures(margins):
         plots.distributions({"r(x, y_w) - r(x, y_l)": margins.numpy()}, "reward model on "
                             "held-out pairs: right of 0, ranked right", "margin"),
         plots.lines("true_score", right=("rm_score",), right_log=False, where=("phase", "ppo"),
-                    x="kl",
+                    x="kl", coloured_by=("global_step", "step"),
                     x_of=lambda kl: np.sqrt(np.maximum(kl, 0)),
                     title="PPO's answers against their KL to the supervised model",
                     xlabel="sqrt(KL(pi || pi_ref)), per answer")]])
