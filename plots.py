@@ -324,10 +324,11 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     value (a stage's name). Against another column: `x`, each row a point, joined in the
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
     `xlabel`: what x is; `log`: a log y axis, or "wide": one where the values drawn span a
-    factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`: where the legend goes in the axis, or "above" it (in a
-    row, over no line, the title above it); `coloured_by`: (column, label): each row a point,
-    not joined, coloured by that column (a colour bar, `label`, says how), a marker per
-    column (the legend's, in grey, says which)."""
+    factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`:
+    where the legend goes in the axis, or "above" it (in a row, over no line, the title above
+    it); `coloured_by`: (column, label): each row a point, not joined, coloured by that
+    column (a colour bar, `label`, says how), a marker per column (the legend's, in grey,
+    says which)."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
         needed = (*columns, *right, x, *([where[0]] if where else []))

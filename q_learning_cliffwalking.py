@@ -235,8 +235,9 @@ def grid(maps, blank):
 
 
 def pictures(tables, v_star, paths, optimal, start, window):
-    """curve.png: the online returns, each the mean of the last `window` episodes; inside.png: each table's V = max_a Q and greedy
-    path beside V* and the optimal path, then |Q - Q*| and the greedy paths' returns."""
+    """curve.png: the online returns, each the mean of the last `window` episodes; inside.png:
+    each table's V = max_a Q and greedy path beside V* and the optimal path, then |Q - Q*| and
+    the greedy paths' returns."""
     maps = [(f"{name}: greedy path", tables[a].max(1), paths[a][0]) for a, name in AGENTS.items()]
     blank = np.arange(len(v_star)) > start  # 37-46, the cliff, and 47, the goal: after the start
     best, x = (v_star[start],), dict(xlabel="episode")  # the optimal return, dashed
