@@ -67,6 +67,8 @@ class Config(cli.OutputFlags):
                         tensorboard="no TensorBoard logs here")
     seed: int = 0
     """seeds torch and the data: same seed, same machine => same progress.csv"""
+    print_every: int = 100
+    """a progress line every this many steps of a stage (and at each held-out check)"""
     digits: int = 2
     """digits of each number to add (2: 47+38=085.)"""
     label_noise: float = 0.3
@@ -410,6 +412,9 @@ def train(cfg: Config):
                 w, l = (answer_logp(dpo_policy, y, P) - answer_logp(reference, y, P)
                         for y in (test_w, test_l))
             print(f"DPO's implicit reward: held-out pair accuracy {(w > l).float().mean():.3f}")
+        print("held-out, stage by stage (docs/ppo_to_rlhf.md reads them):")
+        for name, (score, accuracy) in result["held"].items():
+            print(f"  {name}: true score {score:.3f}, accuracy {accuracy:.3f}", flush=True)
     report.draw_logged(run, pictures(r_w - r_l))  # also after a Ctrl-C
     return dict(result, interrupted=run.interrupted)
 
