@@ -75,7 +75,7 @@ WRONG = {
         ("return -logsigmoid(r_rejected - r_chosen).mean()", "chosen and rejected swapped"),
         ("return logsigmoid(r_chosen - r_rejected).mean()", "the sign: log sigmoid(gap)"),
         ("return -torch.sigmoid(r_chosen - r_rejected).mean()", "sigmoid without the log"),
-        ("return -torch.log(torch.sigmoid(r_chosen - r_rejected)).sum()", "summed over the pairs"),
+        ("return -logsigmoid(r_chosen - r_rejected).sum()", "summed over the pairs"),
         ("return torch.relu(1 - (r_chosen - r_rejected)).mean()", "a margin (hinge) loss"),
         ("return F.margin_ranking_loss(r_chosen, r_rejected, torch.ones_like(r_chosen), "
          "margin=1.0)", "a margin (hinge) loss"),
