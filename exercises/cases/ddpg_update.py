@@ -213,9 +213,12 @@ def worked_cases(fn):
         got_actor = math.nan
     if abs(got_actor - float(expected[1])) > 1e-5 and abs(got_actor - actor_first) < 1e-5:
         swapped_steps = tr("\n  this is exactly what this mistake gives: the actor's step taken "
-                           "before the critic's (the actor must learn from the updated critic)",
+                           "before the critic's, or its loss computed before the critic's step "
+                           "(either way the actor learns from the critic as it was before this "
+                           "update; it must learn from the updated critic)",
                            "\n  你的值恰好是这个常见错误会得到的值：\n"
-                           "    演员在评论员之前更新了（演员要用更新过的评论员来学）")
+                           "    演员在评论员之前更新了，或者它的损失在评论员更新之前就算好了（两种写法"
+                           "都让演员用这次更新之前的评论员来学；演员要用更新过的评论员来学）")
     for name, what in steps:
         for (pname, p), q in zip(yours[name].named_parameters(), theirs[name].parameters()):
             if not torch.allclose(p, q, atol=1e-6):
