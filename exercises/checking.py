@@ -81,6 +81,20 @@ def as_list(x):
 
 # What an error of the learner's code most likely means, from Python's and torch's words
 CAUSES = [
+    (("NoneType",), (
+        "a None where a number belongs: a setting that can be none (e.g. --target-kl none) "
+        "is used before an `if x is not None` checks it",
+        "数值的位置上出现了 None：可以不设的设置（例如 --target-kl none）要先用 `if x is not None` "
+        "判断，再拿来计算")),
+    (("backward through the graph a second time",), (
+        "a graph backpropagated twice: a loss computed once and used for several steps; compute "
+        "it anew before each backward()",
+        "同一个计算图反向传播了两次：损失只算了一次，却用在几次更新里；每次 backward() 之前都要重新"
+        "算一遍损失")),
+    (("is ambiguous",), (
+        "`and`, `or` or `not` on a tensor or array of several values: write `&`, `|`, `~` "
+        "(element by element)",
+        "对含有多个值的张量或数组用了 and、or、not：要写成 &、|、~（逐个元素）")),
     (("modified by an inplace operation", "in-place operation"), (
         "an in-place operation (+=, x[i] = ..., .add_()) on a tensor that autograd needs for "
         "the gradient: write it as a new tensor (x = x + ...)",
@@ -122,7 +136,8 @@ def raised(e, fn=None):
         where = tr(f" at {shown} line {n}" + (f" ({code})" if code else ""),
                    f"（{shown} 第 {n} 行" + (f"：{code}" if code else "") + "）")
     cause = next((tr(*words) for needles, words in CAUSES
-                  if isinstance(e, (RuntimeError, IndexError, ValueError, AssertionError))
+                  if isinstance(e, (RuntimeError, IndexError, ValueError, AssertionError,
+                                    TypeError))
                   and any(n in text for n in needles)), "")
     head = tr(f"your code raised {type(e).__name__}{where}",
               f"你的代码抛出了 {type(e).__name__}{where}")

@@ -37,6 +37,13 @@ RAISING = {
 """, "line 3 (y += reward", "a dtype error: tensors of different types"),
     "device": ("td_target", TD.format("reward + gamma * not_done * next_q.to('meta')"),
                "line 2 (return reward", "a device error: tensors on different devices"),
+    "none": ("td_target", TD.format("reward + None * not_done * next_q"),
+             "line 2 (return reward", "a None where a number belongs"),
+    "twice": ("td_target", TD.format("(lambda y: (y.sum().backward(), y.sum().backward(), y)[2])"
+                                     "(reward.detach().requires_grad_().exp())"),
+              "line 2 (return (lambda y", "a graph backpropagated twice"),
+    "or": ("td_target", TD.format("reward + gamma * (not_done or next_q)"),
+           "line 2 (return reward", "`and`, `or` or `not` on a tensor"),
     "name": ("td_target", TD.format("rewrad + gamma * not_done * next_q"),
              "your code raised NameError at td_target.py line 2 (return rewrad",
              "name 'rewrad' is not defined"),
