@@ -64,6 +64,17 @@ def test_both_readmes_show_the_same_commands():
     assert {"pip install -r requirements.txt", "python ppo_cartpole.py", "pytest"} <= zh
 
 
+def test_both_readmes_open_with_the_number_of_scripts_there_are():
+    """The first paragraph of each README counts the scripts ("Twelve scripts", "十二个脚本"):
+    a new script changes the count in both."""
+    words = {10: ("Ten", "十"), 11: ("Eleven", "十一"), 12: ("Twelve", "十二"),
+             13: ("Thirteen", "十三"), 14: ("Fourteen", "十四"), 15: ("Fifteen", "十五")}
+    en, zh = words[len(SCRIPTS)]
+    first = {path: path.read_text(encoding="utf-8").split("\n\n")[2] for path in (EN, ZH)}
+    assert f"{en} scripts" in first[EN], first[EN][:80]
+    assert f"有{zh}个脚本" in first[ZH], first[ZH][:80]
+
+
 def test_readme_is_short_and_its_docs_links_exist():
     """The README is read in five minutes; what it leaves out is one link away."""
     lines = EN.read_text(encoding="utf-8").splitlines()
