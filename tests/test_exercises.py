@@ -916,6 +916,19 @@ WRONG["td_target"] += [("""def td_target(reward, not_done, next_q, gamma):
                         EXACTLY + "gamma on the reward too")]
 WRONG["gae"] += [(GAE.replace("gamma * next_values[t]", "lam * next_values[t]").replace(
     "gamma * lam *", "gamma *"), "(a)", EXACTLY + "gamma and lambda swapped")]
+GAE_CUT_LATE = GAE.replace("last = advantages[t] = delta + gamma * lam * not_done[t] * last",
+                           "last = advantages[t] = delta + gamma * lam * last\n"
+                           "            last = last * not_done[t]")  # done_{t+1} cuts A_t's sum
+WRONG["gae"] += [(GAE.replace("not_done[t] * last", "last"), "(a)",
+                  EXACTLY + "the sum is not cut where an episode ended"),
+                 (GAE_CUT_LATE, "(a)", "expected 0, got 0.5")]
+
+
+def test_a_sum_cut_a_step_late_is_not_named_as_a_sum_never_cut():
+    """On two steps the two give the same numbers; the three-step case with a termination in
+    the middle tells them apart, so the late cut gets no name rather than the wrong one."""
+    passed, lines = run("gae", compile_answer(GAE_CUT_LATE, "gae"))
+    assert not passed and EXACTLY not in "\n".join(lines), lines
 WRONG["group_advantages"] += [("""def group_advantages(rewards, G, scale):
         r = rewards.view(-1, G)
         adv = r - r.mean(1, keepdim=True)

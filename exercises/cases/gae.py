@@ -51,6 +51,15 @@ def cases():
             "t = 0 处时间截断，V(最后的观测) = next_values[0] = 6，这里不等于 values[1] = 2"
             "（要用的是输入 next_values）：delta_0 = 1 + 0.5 * 6 - 1 = 3"),
          (r, v, t([6.0, 6.0], [4.0, 4.0]), no, at0, 0.5, 1.0), t([3.0, 3.0], [1.0, 1.0])),
+        (tr("3 steps, env 0 terminated at t = 1: A_1 = delta_1 = 0 (A_2 is the next episode's), "
+            "A_0 = delta_0 + 0.5 * A_1 = 1; env 1 on: A = 1.75, 1.5, 1",
+            "3 步，环境 0 在 t = 1 处终止：A_1 = delta_1 = 0（A_2 属于下一个回合），"
+            "A_0 = delta_0 + 0.5 * A_1 = 1；环境 1 一直没结束：A = 1.75、1.5、1"),
+         (t([1.0, 1.0], [1.0, 1.0], [1.0, 1.0]), t([1.0, 1.0], [1.0, 1.0], [1.0, 1.0]),
+          t([2.0, 2.0], [2.0, 2.0], [2.0, 2.0]), flags([False, False], [True, False],
+                                                      [False, False]),
+          flags([False, False], [False, False], [False, False]), 0.5, 1.0),
+         t([1.0, 1.75], [0.0, 1.5], [1.0, 1.0])),
     ]
 
 
