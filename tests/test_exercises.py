@@ -632,6 +632,8 @@ WRONG = {
          "(a)", "not_done is already 1 - terminated"),
     ]],
     "sac_actor_loss": [(sac_answer(**lines), stage, needle) for lines, stage, needle in [
+        (dict(draw="u_dist.loc + u_dist.scale * torch.randn_like(u_dist.loc)  # its own eps"),
+         "(a)", "your answer drew its own noise"),
         (dict(log_slope="torch.zeros_like(u)  # no correction"), "(a)", "no tanh correction"),
         (dict(log_slope="-(torch.log(actor.scale) + 2 * (math.log(2) - u - F.softplus(-2 * u)))"),
          "(a)", "the correction's sign flipped"),

@@ -28,11 +28,14 @@ class FixedNoise(torch.distributions.Normal):
     """A Normal whose draws use a given eps: u = mean + sigma * eps (rsample); sample() is the
     same number without the gradient, as torch's."""
 
+    draws = 0  # how many times a case's noise was drawn: 0 means the answer drew its own
+
     def __init__(self, loc, scale, eps):
         super().__init__(loc, scale)
         self.eps = eps
 
     def rsample(self, sample_shape=torch.Size()):
+        FixedNoise.draws += 1
         return self.loc + self.scale * self.eps
 
     def sample(self, sample_shape=torch.Size()):
@@ -199,8 +202,9 @@ def worked_cases(fn):
     for what, (mean, log_std, eps, scale, bias, obs, alpha) in sac_cases():
         def actor(case=(mean, log_std, eps, scale, bias)):
             return SacActor(*case)
-        yours = actor()
+        yours, FixedNoise.draws = actor(), 0
         out = fn(yours, critic, critic2, obs, alpha)
+        own_noise = FixedNoise.draws == 0  # the distribution's rsample() never called
         loss, logp = sac_by_hand(mean, log_std, eps, scale, bias, obs, alpha)
         inputs = tr(f"\n  input: mean={rounded(mean)}, sigma={rounded(log_std.exp())}, "
                     f"eps={rounded(eps)}, scale={rounded(scale)}, bias={rounded(bias)}, alpha=0.5;"
@@ -245,6 +249,10 @@ def worked_cases(fn):
                                 f"梯度不对：数值对，但对演员的 {name} 的梯度不是这个损失的梯度：\n  "
                                 f"应该是 {rounded(r)}，得到的是 {rounded(g)}"))
         except Failed as e:
+            drew = tr("\n  your answer drew its own noise: the cases fix eps through the "
+                      "distribution's rsample() (u = mean + sigma * eps), as the exercise asks; "
+                      "call it", "\n  你的答案自己抽了噪声：这些例子通过分布的 rsample() 固定 eps"
+                      "（u = mean + sigma * eps），练习要求的正是调用它") if own_noise else ""
             raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {e}" + (tr(
                 "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
-                + named if named else "")) from None
+                + named if named else drew)) from None
