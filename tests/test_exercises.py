@@ -133,7 +133,8 @@ WRONG = {
                 loss = -torch.min(ratio * adv, ratio.clamp(1 - clip_coef, 1 + clip_coef) * adv).mean()
                 info = dict(approx_kl=((ratio - 1) - (logp - data["logp"])).mean().detach(),
                             clipfrac=((ratio - 1).abs() > clip_coef).float().mean(), ratio=ratio)
-                return loss, dist.entropy().mean(), info""", "(a)", "gradient cut"),
+                return loss, dist.entropy().mean(), info""", "(a)",
+         "this is exactly what this mistake does: no gradient reaches pi"),
         ("""def compute_loss_pi(policy, data, clip_coef):
                 dist = Categorical(logits=policy(data["obs"]))
                 logp = dist.log_prob(data["act"])

@@ -20,6 +20,14 @@ def loop_hint():
     return runs.ON_REAL_DATA()
 
 
+def cut():
+    return tr("no gradient reaches pi: the ratio (or log pi, or the loss) detached or computed "
+              "under torch.no_grad();\n    only log pi_old is a constant, r = exp(log pi - "
+              "log pi_old) must carry pi's gradient",
+              "梯度传不到 π：比值（或 log π，或损失）被 detach 了，或是在 torch.no_grad() 下算的；\n"
+              "    只有 log π_old 是常数，r = exp(log π - log π_old) 必须带着 π 的梯度")
+
+
 def cases():
     # pi = (0.5, 0.5) everywhere; pi_old of the taken action 0.25, 0.8 or 0.45, so the ratios
     # r = 2, 0.625, 1.111 are not reciprocal pairs: exp(logp_old - logp) gives other values.
