@@ -211,16 +211,24 @@ def at_equal_steps(at, scripts=("ddpg_walker", "td3_walker", "sac_walker")):
           f"highest up to {k}, each seed | their mean (se) |")
     print("|---|---|---|---|---|---|")
     for script in scripts:
-        name, seeds, lasts, highs = NAMES[script], [], [], []
-        for seed in SEEDS_OF.get(script, ALL):
-            path = record(seed, script)
-            rows = read(path) if path.exists() else []
-            if rows and rows[-1][0] >= at:
-                seeds.append(seed)
-                lasts.append(last10(rows, at))
-                highs.append(max(m for step, m in rows if step <= at))
-        print(f"| {name} | {', '.join(map(str, seeds))} | {', '.join(f'{x:.0f}' for x in lasts)} | "
-              f"{mean_se(lasts)} | {', '.join(f'{x:.0f}' for x in highs)} | {mean_se(highs)} |")
+        seeds, lasts, highs = up_to(script, at)
+        print(f"| {NAMES[script]} | {', '.join(map(str, seeds))} | "
+              f"{', '.join(f'{x:.0f}' for x in lasts)} | {mean_se(lasts)} | "
+              f"{', '.join(f'{x:.0f}' for x in highs)} | {mean_se(highs)} |")
+
+
+def up_to(script, at):
+    """`script`'s committed records up to `at` env steps: the seeds that reached it, and per
+    seed the mean of the last 10 evaluations up to `at` and the highest evaluation up to it."""
+    seeds, lasts, highs = [], [], []
+    for seed in SEEDS_OF.get(script, ALL):
+        path = record(seed, script)
+        rows = read(path) if path.exists() else []
+        if rows and rows[-1][0] >= at:
+            seeds.append(seed)
+            lasts.append(last10(rows, at))
+            highs.append(max(m for step, m in rows if step <= at))
+    return seeds, lasts, highs
 
 
 def mean_se(values):

@@ -71,13 +71,7 @@ def at_equal_time(rates, seconds):
     for script, rate_of in rates.items():
         free = 0 if script == "ppo_reacher" else WARM_UP
         at = min((free + int(statistics.median(rate_of) * seconds)) // 5000 * 5000, records.BUDGET)
-        seeds, lasts, highs = [], [], []
-        for seed in records.SEEDS_OF.get(script, records.ALL):
-            rows = records.read(records.record(seed, script))
-            if rows[-1][0] >= at:
-                seeds.append(seed)
-                lasts.append(records.last10(rows, at))
-                highs.append(max(m for step, m in rows if step <= at))
+        seeds, lasts, highs = records.up_to(script, at)
         each = ", ".join
         print(f"| {records.NAMES[script]} | {at:,} | {each(map(str, seeds))} | "
               f"{each(f'{x:.0f}' for x in lasts)} | {records.mean_se(lasts)} | "
