@@ -859,25 +859,7 @@ WRONG["q_learning_update"] = td_wrong(False) + [
 # Named mistakes: a setting written as a number (the script's default or a usual one), a sum
 # where the mean belongs, a std over the wrong axis, gamma and lambda swapped, and the like
 EXACTLY = "this is exactly what this mistake gives: "
-A2C_LOSS = """def a2c_loss(model, data, cfg):
-        obs, act, adv, ret = data["obs"], data["act"], data["adv"], data["ret"]
-        logits, values = model(obs)
-        dist = Categorical(logits=logits)
-        loss_pi = -(dist.log_prob(act) * adv).mean()
-        loss_v = 0.5 * ((values - ret) ** 2).mean()
-        entropy = dist.entropy().mean()
-        loss = loss_pi + cfg.vf_coef * loss_v - cfg.ent_coef * entropy
-        explained = 1 - (ret - values).var() / ret.var().clamp_min(1e-8)
-        return loss, dict(loss_pi=loss_pi.item(), loss_v=loss_v.item(), entropy=entropy.item(),
-                          explained_var=explained.item(), values=values.detach(), ret=ret)"""
-GAE = """def gae(rewards, values, next_values, terminated, truncated, gamma, lam):
-        advantages, last = torch.zeros_like(rewards), torch.zeros_like(rewards[0])
-        not_terminated = (~terminated).to(rewards.dtype)
-        not_done = (~(terminated | truncated)).to(rewards.dtype)
-        for t in reversed(range(len(rewards))):
-            delta = rewards[t] + gamma * next_values[t] * not_terminated[t] - values[t]
-            last = advantages[t] = delta + gamma * lam * not_done[t] * last
-        return advantages"""
+
 WRONG["discounted_returns"] += [
     ("""def discounted_returns(rewards, next_values, terminated, truncated, gamma):
             returns, future = torch.zeros_like(rewards), next_values[-1]
@@ -904,7 +886,7 @@ WRONG["discounted_returns"] += [
                     future = torch.where(terminated[t + 1], torch.zeros_like(future), future)
                 returns[t] = future = rewards[t] + gamma * future
             return returns""", "(a)", EXACTLY + "terminated[t + 1] read at step t")]
-WRONG["a2c_loss"] += [(A2C_LOSS.replace(old, new), "(a)", EXACTLY + needle)
+WRONG["a2c_loss"] += [(script_with("a2c_loss", old, new), "(a)", EXACTLY + needle)
                       for old, new, needle in (
     ("cfg.vf_coef", "0.5", "0.5 written as a number where cfg.vf_coef is meant"),
     ("-(dist.log_prob(act) * adv).mean()", "-(dist.log_prob(act) * adv).sum()",
@@ -917,12 +899,13 @@ WRONG["q_learning_update"] += [(td_answer(False).replace("Q[s, a] +=", "Q[s] +="
 WRONG["td_target"] += [("""def td_target(reward, not_done, next_q, gamma):
                               return gamma * (reward + not_done * next_q)""", "(a)",
                         EXACTLY + "gamma on the reward too")]
-WRONG["gae"] += [(GAE.replace("gamma * next_values[t]", "lam * next_values[t]").replace(
-    "gamma * lam *", "gamma *"), "(a)", EXACTLY + "gamma and lambda swapped")]
-GAE_CUT_LATE = GAE.replace("last = advantages[t] = delta + gamma * lam * not_done[t] * last",
-                           "last = advantages[t] = delta + gamma * lam * last\n"
-                           "            last = last * not_done[t]")  # done_{t+1} cuts A_t's sum
-WRONG["gae"] += [(GAE.replace("not_done[t] * last", "last"), "(a)",
+WRONG["gae"] += [(script_with("gae", "gamma * next_values[t]", "lam * next_values[t]").replace(
+    "gamma * lam * not_done[t] * last", "gamma * not_done[t] * last"), "(a)",
+    EXACTLY + "gamma and lambda swapped")]
+GAE_CUT_LATE = script_with(  # done_{t+1} cuts A_t's sum
+    "gae", "last = advantages[t] = delta + gamma * lam * not_done[t] * last",
+    "last = advantages[t] = delta + gamma * lam * last\n        last = last * not_done[t]")
+WRONG["gae"] += [(script_with("gae", "not_done[t] * last", "last"), "(a)",
                   EXACTLY + "the sum is not cut where an episode ended"),
                  (GAE_CUT_LATE, "(a)", "expected 0, got 0.5")]
 
