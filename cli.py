@@ -161,6 +161,8 @@ def parse_config(cls, argv=None, description=None):
         hidden = f.name in unused  # out of --help, and absent unless given (then refused)
         parser.add_argument(flag, default=argparse.SUPPRESS if hidden else f.default, **how,
                             help=argparse.SUPPRESS if hidden else text)
+    parser.add_argument("--lang", choices=("zh", "en"), default=argparse.SUPPRESS,  # read by
+                        help="\n".join(help_zh.LANG_HELP[:2 if zh else 1]))  # help_zh.wanted
     args, unknown = parser.parse_known_args(argv)
     if unknown:  # a mistyped flag: the nearest known one, if any is near (cutoff 0.7: a flag
         # of another script, --resume, is not offered --curves)

@@ -20,8 +20,9 @@ from pathlib import Path
 HELP_ZH = Path(__file__).resolve().parent / "locale" / "flags.zh-CN.md"
 OUTPUT_ZH = HELP_ZH.with_name("output.zh-CN.md")
 HINT = "--help-zh: a Chinese line under each flag (每个参数下面加一行中文说明)"  # --help ends so
-LANG_HINT = "--lang zh|en: the output's language (default: the locale's, as for --help)"
-EPILOG = f"{LANG_HINT}\n\n{HINT}"  # what --help ends with
+EPILOG = HINT  # what --help ends with
+LANG_HELP = ("the output's language: zh (Chinese) or en (default: the locale's, as for --help)",
+             "输出的语言：zh 中文，en 英文（不写时按系统语言，和 --help 一样）")  # --lang, in --help
 
 
 def wanted(argv):
