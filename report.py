@@ -131,7 +131,7 @@ def finish_updates(run, threshold, play, before, pictures, maps=None):
         if cfg.gifs:  # an episode each, acting as play[0]: after.gif, the evaluation's first
             for name, act_of in (("before.gif", before[0][2]), ("after.gif", play[0][2])):
                 ret = common.record_gif(cfg.env_id, act_of(seed), run_dir / name, seed, **GIF)
-                print(f"{name}: return {ret:.0f} -> {run_dir / name}", flush=True)
+                print(f"{name}: return {shown(ret)} -> {run_dir / name}", flush=True)
     except KeyboardInterrupt:  # main() then exits with 130 (143 after a SIGTERM)
         result["interrupted"] = True
         interrupted_at(run, step, "replay", ", after training, before its evaluation and "
@@ -175,8 +175,9 @@ def finish_evaluations(run, global_step, interrupted, untrained, actor, device, 
     global_step, evaluations (evaluations.csv's rows), episodes, steps_per_second (learning
     phase) and interrupted."""
     learned_from, since = run.timer.get("learning_since", (global_step, time.time()))
-    learned = global_step - learned_from
-    rate = learned / (time.time() - since) if learned > 0 else float("nan")
+    timed = global_step - learned_from  # the clock starts as the phase's first step ends
+    rate = timed / (time.time() - since) if timed > 0 else float("nan")
+    learned = timed + getattr(run.cfg, "num_envs", 1) if timed > 0 else 0  # that step too
     result = dict(run_dir=run.dir, global_step=global_step, evaluations=run.evaluations,
                   episodes=run.episodes, steps_per_second=rate, interrupted=interrupted)
     checkpoints.save_model(run.dir / "model.pt", run.script, run.cfg, global_step,
@@ -200,7 +201,7 @@ def finish_evaluations(run, global_step, interrupted, untrained, actor, device, 
             for name, net in (("before.gif", untrained), ("after.gif", actor)):
                 ret = common.record_gif(run.cfg.env_id, common.deterministic(net, device),
                                         run.dir / name, run.cfg.eval_seed, **gif)
-                print(f"{name}: return {ret:.0f} -> {run.dir / name}", flush=True)
+                print(f"{name}: return {shown(ret)} -> {run.dir / name}", flush=True)
     except KeyboardInterrupt:  # main() then exits with 130 (143 after a SIGTERM)
         result["interrupted"] = True
         interrupted_at(run, global_step, "replay", ", after training, while its before and "
@@ -233,3 +234,8 @@ def play(cfg, path, env_id, ways, gif=GIF, watch=None):
               f"mean {np.mean(returns):.1f} ({what})", flush=True)
         first = returns if first is None else first
     return first
+
+
+def shown(ret):
+    """A GIF's return as printed: whole numbers, one decimal under 10 (Reacher's -0.3 is not -0)."""
+    return f"{ret:.0f}" if abs(ret) >= 10 else f"{ret:.1f}"
