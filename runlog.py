@@ -264,7 +264,7 @@ class EvaluationLog:
         self.script, self.cfg, self.logged = script, cfg, logged
         self.learning_starts = learning_starts
         labels, self.tags = labels_and_tags(logged)
-        self.labels = {"eval_mean": "evaluation: mean return, no noise",
+        self.labels = {"eval_mean": "evaluation: mean return, deterministic actions",
                        "train_return_mean10": f"training: mean of the last {RECENT} episodes",
                        **labels}
         self.episodes, self.evaluations = [], []  # (step, return); evaluations.csv's rows
