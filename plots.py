@@ -619,6 +619,7 @@ def maps_row(maps, title=""):
                 ax.set_ylim(extent[2:])
             ax.set_xlabel(maps.get("xlabel", ""), fontsize=7)
             ax.set_ylabel(maps.get("ylabel", ""), fontsize=7)
+    fill.right_axis = True  # each map's colour bar and its ticks: room before the next map
     return len(panels), fill
 
 
