@@ -31,7 +31,19 @@ def tr(en, zh):
 
 
 class Failed(Exception):
-    """A stage failed: the message says what differs."""
+    """A stage failed: the message says what differs (`plain`: without the effect line that
+    compare adds, for a caller that names a listed mistake instead)."""
+
+    def __init__(self, message, plain=None):
+        super().__init__(message)
+        self.plain = message if plain is None else plain
+
+
+def named(label, does="gives"):
+    """The line that names a mistake (or its effect) under a failure's message."""
+    return (tr(f"\n  this is exactly what this mistake {does}: ",
+               "\n  这正是这个常见错误的表现：\n    " if does == "does" else
+               "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label)
 
 
 def t(*rows):
@@ -161,29 +173,88 @@ def compare(name, got, expected):
                             f"{name}：应该是形状为 {tuple(expected.shape)} 的张量，得到的是 "
                             f"{type(got).__name__} {got!r}"))
         if got.shape != expected.shape:
-            raise Failed(tr(f"{name}: expected shape {tuple(expected.shape)}, got "
-                            f"{tuple(got.shape)} (a (B, 1) against a (B,) broadcasts silently)",
-                            f"{name}：形状应该是 {tuple(expected.shape)}，得到的是 "
-                            f"{tuple(got.shape)}（(B, 1) 和 (B,) 相减会悄悄广播成 (B, B)）"))
+            message = tr(f"{name}: expected shape {tuple(expected.shape)}, got "
+                         f"{tuple(got.shape)}",
+                         f"{name}：形状应该是 {tuple(expected.shape)}，得到的是 {tuple(got.shape)}")
+            raise Failed(message + effect(got, expected), message)
         close = torch.isclose(got.detach().float(), expected, atol=1e-5, rtol=1e-5)
         if not close.all() and expected.dim() == 0:
-            raise Failed(tr(f"{name}: expected {expected.item():.6g}, got {got.item():.6g}",
-                            f"{name}：应该是 {expected.item():.6g}，得到的是 {got.item():.6g}"))
+            message = tr(f"{name}: expected {expected.item():.6g}, got {got.item():.6g}",
+                         f"{name}：应该是 {expected.item():.6g}，得到的是 {got.item():.6g}")
+            raise Failed(message + effect(got, expected), message)
         if not close.all():
             wrong = [tuple(int(k) for k in i) for i in (~close).nonzero()]
             i = wrong[0]
             also = (tr(" (all that differ: ", "（所有不同的位置：") + ", ".join(map(str, wrong[:8]))
                     + tr(")", "）")) if len(wrong) > 1 else ""
-            raise Failed(tr(f"{name}: first difference at index {i}: expected "
-                            f"{expected[i].item():.6g}, got {got[i].item():.6g}{also}",
-                            f"{name}：第一个不同在下标 {i}：应该是 {expected[i].item():.6g}，"
-                            f"得到的是 {got[i].item():.6g}{also}")
-                         + tr("\n  expected ", "\n  应该是 ") + str(rounded(expected))
-                         + tr("\n  got      ", "\n  得到的是 ") + str(rounded(got)))
+            message = (tr(f"{name}: first difference at index {i}: expected "
+                          f"{expected[i].item():.6g}, got {got[i].item():.6g}{also}",
+                          f"{name}：第一个不同在下标 {i}：应该是 {expected[i].item():.6g}，"
+                          f"得到的是 {got[i].item():.6g}{also}")
+                       + tr("\n  expected ", "\n  应该是 ") + str(rounded(expected))
+                       + tr("\n  got      ", "\n  得到的是 ") + str(rounded(got)))
+            raise Failed(message + effect(got, expected), message)
         return
     if not isinstance(got, (int, float)) or abs(float(got) - float(expected)) > 1e-5:
         raise Failed(tr(f"{name}: expected {expected:.6g}, got {got!r}",
                         f"{name}：应该是 {expected:.6g}，得到的是 {got!r}"))
+
+
+def effect(got, expected):
+    """What a wrong tensor `got` is, where that is plain from the numbers alone, as a named line
+    (or ''): the right values in another shape, a (B, 1) broadcast against a (B,), the right
+    result with its sign flipped, times one factor, or shifted by one amount everywhere. These
+    are facts about the answer's numbers in this case, never a guess at another mistake."""
+    got, expected = got.detach().double(), expected.double()
+    if got.shape != expected.shape:
+        if got.numel() == expected.numel() and torch.allclose(
+                got.reshape(expected.shape), expected, atol=1e-5, rtol=1e-5):
+            return named(tr(f"the right values in the shape {tuple(got.shape)}: flatten "
+                            f"(reshape) them to {tuple(expected.shape)}",
+                            f"数值都对，形状是 {tuple(got.shape)}：要展平（reshape）成 "
+                            f"{tuple(expected.shape)}"))
+        if expected.dim() == 1 and tuple(got.shape) == (len(expected), len(expected)):
+            return named(tr("a (B, 1) against a (B,) broadcast to (B, B): one side has a "
+                            "dimension too many (a [:, None], or a network's (B, 1) output "
+                            "not squeezed)",
+                            "(B, 1) 和 (B,) 相运算，悄悄广播成了 (B, B)：有一边多了一维（多写了 "
+                            "[:, None]，或者网络输出的 (B, 1) 没有 squeeze）"))
+        return ""
+    if (expected.dim() >= 1 and len(expected) > 1
+            and torch.allclose(got, expected.flip(0), atol=1e-5, rtol=1e-5)):
+        return named(tr("the right values in reverse order along the first axis (time): a loop "
+                        "that runs forward where it must run backward (t = T-1 down to 0), or "
+                        "a result reversed", "数值都对，但沿第一维（时间）顺序反了：循环该从后往前"
+                        "（t 从 T-1 到 0），却从前往后跑了，或者结果被倒了过来"))
+    nonzero = expected.abs() > 1e-6
+    if not nonzero.any():
+        return ""
+    if torch.allclose(got, -expected, atol=1e-5, rtol=1e-5):
+        return named(tr("the right result with its sign flipped (a loss is minus the objective "
+                        "it maximises: one minus too many, or one missing)",
+                        "结果对了，符号反了（损失是要最大化的目标取负：多了或少了一个负号）"))
+    ratio = got[nonzero] / expected[nonzero]
+    if (torch.allclose(got, ratio[0] * expected, atol=1e-5, rtol=1e-5)
+            and abs(ratio[0] - 1) > 1e-4 and ratio[0] != 0):
+        c = ratio[0].item()
+        simple = [f"{n}" for n in range(2, 65) if abs(c - n) < 1e-4 * n] + [
+            f"1/{n}" for n in range(2, 65) if abs(c - 1 / n) < 1e-4 / n]
+        if expected.numel() == 1 and not simple:
+            return ""  # any wrong number is some multiple of a single right one
+        times = simple[0] if simple else f"{c:.4g}"
+        return named(tr(f"{times} times the right result everywhere: a sum where a mean is "
+                        f"meant (or a mean where a sum is), or a factor missing or added",
+                        f"处处都是正确结果的 {times} 倍：该求平均的地方求了和（或者反过来），或者少了、"
+                        f"多了一个系数"))
+    shift = got - expected
+    if expected.numel() > 1 and torch.allclose(shift, shift.reshape(-1)[0].expand_as(shift),
+                                                atol=1e-5, rtol=1e-5):
+        return named(tr(f"the right result shifted by {shift.reshape(-1)[0].item():.4g} "
+                        f"everywhere: a constant term added, dropped or counted a wrong number "
+                        f"of times",
+                        f"处处比正确结果多了 {shift.reshape(-1)[0].item():.4g}：多加、漏掉了一个常数项，"
+                        f"或者它被算错了次数"))
+    return ""
 
 
 def rounded(x):
@@ -462,9 +533,10 @@ def check_cases(ex, fn):
                 compare(ex.outputs[0], got, expected)
             compare_gradients(ex, fn, args)
         except Failed as e:
+            listed = named_mistake(ex, args, got, fn, expected)
             raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
-                         + f"{show(ex, args)}\n  {e}"
-                         + named_mistake(ex, args, got, fn, expected)) from None
+                         + f"{show(ex, args)}\n  " + (e.plain if listed else str(e))
+                         + listed) from None
 
 
 def gradients(f, args, parameters, index=0):
@@ -501,21 +573,42 @@ def compare_gradients(ex, fn, args):
             continue
         yours = gradients(fn, args, parameters, index)
         try:
-            compare_loss_gradients(reference, yours, lambda kind: gradient_named(ex, loss, kind))
+            compare_loss_gradients(reference, yours,
+                                   lambda kind, to="": gradient_named(ex, loss, kind, to))
         except Failed as e:
             raise Failed((tr(f"{loss}: ", f"{loss}：") if len(losses) > 1 else "") + str(e)) \
                 from None
 
 
-def gradient_named(ex, loss, kind):
-    """The mistake a gradient failure of this kind ("cut", "stray": where none belongs) of the
-    output `loss` shows, as a line to add to the message, or ''."""
+def gradient_named(ex, loss, kind, to=""):
+    """The mistake a gradient failure of this kind ("cut", "stray": where none belongs,
+    "reversed") of the output `loss` shows, as a line to add to the message: the exercise's own
+    name for it, else what the failure itself is (`to`: the input the gradient is about)."""
     hook = getattr(ex, "gradient_mistake", None)
     label = hook(loss, kind) if hook else ""
     if not label and kind == "cut" and getattr(ex, "cut", None):
         label = ex.cut()
-    return (tr("\n  this is exactly what this mistake does: ",
-               "\n  这正是这个常见错误的表现：\n    ") + label) if label else ""
+    return named(label or gradient_effect(kind, to), "does")
+
+
+def gradient_effect(kind, to):
+    """What a gradient failure is, where the exercise names no mistake for it."""
+    if kind == "cut" and not to:
+        return tr("the loss computed from numbers, not from the graph (under torch.no_grad(), "
+                  "from .item() or .detach(), or from a tensor made anew)",
+                  "损失是用数字算的，不在计算图上（在 torch.no_grad() 下，经过 .item()、.detach()，"
+                  "或者用新建的张量算的）")
+    return {"cut": tr(f"{to} detached on its way to the loss (.detach(), .item(), "
+                      f"torch.no_grad() or a new tensor): what should train it does not",
+                      f"{to} 在通往损失的路上被切断了（.detach()、.item()、torch.no_grad() 或新建"
+                      f"的张量）：该训练它的损失训练不到它"),
+            "stray": tr(f"{to} not detached where this loss must take it as a constant (a "
+                        f"target, an advantage, pi_old): the loss trains what it must not",
+                        f"{to} 在这个损失里本该是常数（目标值、优势、π_old），却没有 detach："
+                        f"损失训练了不该训练的东西"),
+            "reversed": tr(f"the gradient with respect to {to} reversed while the value is "
+                           f"right: a sign inside a term that carries the gradient",
+                           f"数值对，对 {to} 的梯度方向反了：带梯度的那一项里有个符号反了")}[kind]
 
 
 def compare_loss_gradients(reference, yours, named):
@@ -538,7 +631,7 @@ def compare_loss_gradients(reference, yours, named):
                 f"or a tensor made\n  anew, on the way from {name} to the loss): expected "
                 f"{rounded(r)}, got zeros",
                 f"梯度被切断：数值对，但梯度传不到 {name}（从 {name} 到损失的路上有 .detach() "
-                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0") + named("cut"))
+                f"或新建的张量）：\n  应该是 {rounded(r)}，得到的是 0") + named("cut", name))
         if r.abs().max() <= 1e-8:
             raise Failed(tr(
                 f"a gradient where none belongs: the value is right, and your loss sends a "
@@ -548,14 +641,14 @@ def compare_loss_gradients(reference, yours, named):
                 f"got {rounded(g)}, expected zeros",
                 f"多出来的梯度：数值对，但你的损失把梯度传进了 {name}，这个损失不该训练它（本该是常数的"
                 f"量带着梯度，\n  例如用正在训练的网络重新算的优势）：得到 {rounded(g)}，应该是 0")
-                + named("stray"))
+                + named("stray", name))
         if torch.allclose(g, -r, atol=1e-6, rtol=1e-4):
             raise Failed(tr(
                 f"gradient reversed: the value is right, and the gradient with respect to {name} "
                 f"has the\n  opposite sign: training would move it the wrong way: expected "
                 f"{rounded(r)}, got {rounded(g)}",
                 f"梯度方向反了：数值对，但对 {name} 的梯度符号相反，训练会把它往反方向推：\n  应该是 "
-                f"{rounded(r)}，得到的是 {rounded(g)}"))
+                f"{rounded(r)}，得到的是 {rounded(g)}") + named("reversed", name))
         raise Failed(tr(
             f"wrong gradient: the value is right, and the gradient with respect to {name} is "
             f"not the loss's:\n  expected {rounded(r)}, got {rounded(g)} (a term that should "

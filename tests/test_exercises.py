@@ -829,7 +829,7 @@ TD_MISTAKES = [  # (the part written otherwise, the words the message must hold)
     (dict(back="float(alpha * td_error)"), "the step alpha * delta returned"),
     (dict(step="Q[s_next, 0] += alpha * td_error"), "the entry of s' updated"),
     (dict(step="Q = Q.copy(); Q[s, a] += alpha * td_error"),
-     "Q did not change: update the table in place"),
+     "not the caller's: update it in place"),
     (dict(back="None"), "nothing returned: return delta"),
 ]
 
@@ -927,7 +927,7 @@ WRONG["bradley_terry_loss"] = [(f"""def bradley_terry_loss(r_chosen, r_rejected)
     ("-F.logsigmoid((r_chosen - r_rejected).mean())", "the mean gap inside the log"))]
 WRONG["reward_to_go"] += [(script_with("reward_to_go", old, new), "(a)", needle)
                           for old, new, needle in (
-    ("np.zeros(len(rewards))", "np.zeros_like(rewards)", "an integer array truncates every G_t"),
+    ("np.zeros(len(rewards))", "np.zeros_like(rewards)", "an integer array: it truncates every G_t"),
     ("returns, G = np.zeros(len(rewards)), last_value", "returns, G = np.zeros(len(rewards)), "
      "gamma * last_value", EXACTLY + "G started at gamma * last_value"))]
 

@@ -5,7 +5,7 @@ import importlib
 
 import numpy as np
 
-from checking import tr, Failed
+from checking import tr, Failed, named as named_line
 
 
 def tabular_table():
@@ -164,10 +164,11 @@ def check_td_control(fn, sarsa):
                                 f"(only Q[s, a] moves)", f"除了 Q[s, a] = Q[{s}, {a}] 之外，"
                                 f"还有别的项变了：{others}（只有 Q[s, a] 会变）"))
             if not changed and abs(q_new - before[s, a]) > 1e-9:
-                raise Failed(tr("Q did not change: update the table in place (Q[s, a] += ...); "
-                                "Q = ... or Q.copy() leaves the caller's table as it was",
-                                "Q 没有变：要原地更新这张表（Q[s, a] += ...）；Q = ... 或 Q.copy() "
-                                "不会改动调用者手里的那张表"))
+                raise Failed(tr("Q did not change", "Q 没有变") + named_line(tr(
+                    "the update written into another table (Q = ..., Q.copy()), not the "
+                    "caller's: update it in place (Q[s, a] += ...)",
+                    "更新写进了另一张表（Q = ...、Q.copy()），不是调用者手里的那张：要原地更新"
+                    "（Q[s, a] += ...）"), "does"))
             if abs(Q[s, a] - q_new) > 1e-6:
                 same_q = [(label, d) for label, (q, d) in tabular_mistakes(*case)
                           if abs(Q[s, a] - q) < 1e-6]
@@ -185,6 +186,6 @@ def check_td_control(fn, sarsa):
                     " (nothing returned: return delta, the TD error, as a float)",
                     "（没有返回值：要返回 TD 误差 delta，一个浮点数）") if got is None else ""))
         except Failed as e:
-            raise Failed(tr("case: ", "例子：") + what + f"\n  {e}" + (tr(
+            raise Failed(tr("case: ", "例子：") + what + f"\n  {e.plain if named else e}" + (tr(
                 "\n  this is exactly what this mistake gives: ",
                 "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None

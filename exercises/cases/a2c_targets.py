@@ -7,7 +7,7 @@ import torch
 
 import common
 
-from checking import tr, Failed, t, flags, compare
+from checking import tr, Failed, t, flags, compare, named as named_line
 import runs
 
 SCRIPT = "actor_critic_cartpole"
@@ -95,12 +95,12 @@ def worked_cases(fn):
             compare("returns", got[0], returns)
             compare("advantages", got[1], advantages)
             if got[0].requires_grad or got[1].requires_grad:
-                raise Failed(tr(
-                    "the values are right, and they carry a gradient into the critic: compute V "
-                    "under torch.no_grad() (the targets are constants; A2C's actor loss would "
-                    "otherwise train the critic)",
-                    "数值对，但它们带着梯度连到评论员：要在 torch.no_grad() 下计算 V（目标是常数；"
-                    "否则 A2C 演员的损失会去训练评论员）"))
+                raise Failed(tr("the values are right, and they carry a gradient into the "
+                                "critic", "数值对，但它们带着梯度连到评论员") + named_line(tr(
+                    "V computed with its graph: compute it under torch.no_grad() (the targets "
+                    "are constants; A2C's actor loss would otherwise train the critic)",
+                    "V 带着计算图：要在 torch.no_grad() 下计算 V（目标是常数；否则 A2C 演员的损失会去"
+                    "训练评论员）"), "does"))
         except Failed as e:
             named = ""
             if lam is None and isinstance(got, tuple) and torch.is_tensor(got[0]):
@@ -109,4 +109,5 @@ def worked_cases(fn):
                     if got[0].shape == value.shape and torch.allclose(got[0].detach(), value):
                         named = tr("\n  this is exactly what this mistake gives: ",
                                    "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
-            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}{named}") from None
+            shown = e.plain if named else str(e)
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {shown}{named}") from None

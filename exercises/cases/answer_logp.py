@@ -7,8 +7,14 @@ import math
 import torch
 
 from checking import (CheckerFault, Failed, Fixed, compare, compare_loss_gradients, same_value,
+                      gradient_effect, named as named_line,
                       t, tr)
 import runs
+
+
+def effect_of(kind, to=""):
+    """A gradient failure's line: what it is (the listed mistakes are values, not gradients)."""
+    return named_line(gradient_effect(kind, to), "does")
 
 SCRIPT = "rlhf_addition"
 FUNCTION = "answer_logp"
@@ -126,16 +132,17 @@ def worked_cases(fn):
             compare("logp", got, expected)
             yours = model.outputs[0]
             if not got.requires_grad:
-                compare_loss_gradients({"logits": yours}, None, lambda kind: "")
+                compare_loss_gradients({"logits": yours}, None, effect_of)
             got.sum().backward()
             reference = PositionModel(yours.detach())
             own(reference, seqs, P).sum().backward()
             compare_loss_gradients({model.names[0]: reference.outputs[0].grad},
                                    {model.names[0]: yours.grad if yours.grad is not None
-                                    else torch.zeros_like(yours)}, lambda kind: "")
+                                    else torch.zeros_like(yours)}, effect_of)
         except Failed as e:
             named = next((label for label, value in mistakes(model, seqs, P)
                           if same_value(got, value)), "")
-            raise Failed(head + str(e) + (tr("\n  this is exactly what this mistake gives: ",
+            shown = e.plain if named else str(e)
+            raise Failed(head + shown + (tr("\n  this is exactly what this mistake gives: ",
                                              "\n  你的值恰好是这个常见错误会得到的值：\n    ")
                                           + named if named else "")) from None

@@ -131,7 +131,7 @@ def worked_cases(fn):
         except Failed as e:
             named = [label for label, value in mistakes
                      if got is not None and torch.allclose(got, value, atol=1e-5)]
-            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e.plain if named else e}" + (tr(
                 "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
                 + named[0] if named else "")) from None
     for what, stats in logged:  # then what is logged of both next-state values

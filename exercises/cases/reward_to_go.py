@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import torch
 
-from checking import only_if, tr, Failed, t, as_list, compare, written_default
+from checking import only_if, tr, Failed, t, as_list, compare, written_default, named as named_line
 import runs
 
 SCRIPT = "reinforce_cartpole"
@@ -133,14 +133,15 @@ def worked_cases(fn):
             if values is not None and (not isinstance(got, np.ndarray) or got.dtype.kind != "f"):
                 raise Failed(tr(f"expected a numpy array of floats (np.zeros(len(rewards)), as "
                                 f"the script's own makes), got {type(got).__name__}"
-                                + (f" of {got.dtype}: an integer array truncates every G_t "
-                                   f"stored in it (np.zeros_like of integer rewards is one)"
-                                   if isinstance(got, np.ndarray) else ""),
+                                + (f" of {got.dtype}" if isinstance(got, np.ndarray) else ""),
                                 f"应该返回浮点数的 numpy 数组（像脚本自己那样用 np.zeros(len(rewards))），"
                                 f"得到的是 {type(got).__name__}"
-                                + (f"，类型是 {got.dtype}：整数数组会把存进去的每个 G_t 截断成整数"
-                                   f"（对整数奖励用 np.zeros_like 就得到这样的数组）"
-                                   if isinstance(got, np.ndarray) else "")))
+                                + (f"，类型是 {got.dtype}" if isinstance(got, np.ndarray) else ""))
+                             + (named_line(tr("an integer array: it truncates every G_t stored in it "
+                                         "(np.zeros_like of integer rewards is one)",
+                                         "整数数组：存进去的每个 G_t 都被截断成整数（对整数奖励用 "
+                                         "np.zeros_like 就得到这样的数组）"), "does")
+                                if isinstance(got, np.ndarray) else ""))
             if values is None or np.ndim(values) != 1:
                 raise Failed(tr(f"expected an array of {len(rewards)} numbers (one G_t per step), "
                                 f"got {type(got).__name__} {got!r}",
@@ -152,6 +153,7 @@ def worked_cases(fn):
                      if values is not None and np.shape(values) == np.shape(value)
                      and np.allclose(values, value, atol=1e-5)
                      and not np.allclose(value, expected, atol=1e-5)]  # a wrong value only
-            raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {e}" + (tr(
+            shown = e.plain if named else str(e)
+            raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {shown}" + (tr(
                 "\n  this is exactly what this mistake gives: ",
                 "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None

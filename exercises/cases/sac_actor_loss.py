@@ -253,6 +253,7 @@ def worked_cases(fn):
                       "distribution's rsample() (u = mean + sigma * eps), as the exercise asks; "
                       "call it", "\n  你的答案自己抽了噪声：这些例子通过分布的 rsample() 固定 eps"
                       "（u = mean + sigma * eps），练习要求的正是调用它") if own_noise else ""
-            raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {e}" + (tr(
+            shown = e.plain if named or drew else str(e)
+            raise Failed(tr("case: ", "例子：") + what + inputs + f"\n  {shown}" + (tr(
                 "\n  this is exactly what this mistake gives: ", "\n  这正是这个错误会得到的值：")
                 + named if named else drew)) from None

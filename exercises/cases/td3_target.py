@@ -134,6 +134,6 @@ def worked_cases(fn):
             if y1 is not None and (y1 - expected).abs().max() > 100:  # sigma = 10000 here
                 named = [tr("the noise not clipped to [-c, c] (sigma is 10000 in this case)",
                             "噪声没有裁剪到 [-c, c]（这个例子里 σ 是 10000）")]
-            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e}" + (tr(
+            raise Failed(tr("case: ", "例子：") + f"{what}\n  {e.plain if named else e}" + (tr(
                 "\n  this is exactly what this mistake gives: ",
                 "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0] if named else "")) from None
