@@ -49,9 +49,11 @@ def cases():
 
 def surrogate(policy, data, eps, inverted=False, use_max=False, clip_product=False,
               renormalized=False, upper_only=False, min_of_clipped_product=False,
-              ratio_min=False, clipped_only=False):
+              ratio_min=False, clipped_only=False, log_ratio=None):
     logp = Categorical(logits=policy(data["obs"])).log_prob(data["act"]).detach()
     r = torch.exp(data["logp"] - logp) if inverted else torch.exp(logp - data["logp"])
+    if log_ratio is not None:  # the ratio written from the log-probabilities without exp
+        r = logp / data["logp"] if log_ratio == "divided" else logp - data["logp"]
     a = data["adv"]
     if renormalized:
         a = (a - a.mean()) / (a.std() + 1e-8)
@@ -75,6 +77,13 @@ def mistakes(policy, data, eps):
              surrogate(policy, data, eps, inverted=True)),
             (tr("max where the pessimistic bound takes min", "用了 max，悲观的下界要取 min"),
              surrogate(policy, data, eps, use_max=True)),
+            (tr("the ratio as logp / logp_old: log-probabilities divided, where the ratio of "
+                "probabilities is exp(logp - logp_old)", "比值写成了 logp / logp_old：对数概率相除；"
+                "概率之比是 exp(logp - logp_old)"),
+             surrogate(policy, data, eps, log_ratio="divided")),
+            (tr("the ratio as logp - logp_old without exp: that is log r, the ratio is its exp",
+                "比值写成了 logp - logp_old，没有取 exp：那是 log r，比值是它的 exp"),
+             surrogate(policy, data, eps, log_ratio="difference")),
             (tr("the product r * A clipped, not the ratio r", "裁剪了乘积 r * A，而不是比值 r"),
              surrogate(policy, data, eps, clip_product=True)),
             (tr("the product r * A clipped inside the min, min(r A, clip(r A, 1 - eps, 1 + eps)): "

@@ -64,7 +64,30 @@ def ddpg_critic_mistakes(nets, batch, cfg):
                 (tr("Q(s', a) compared with the target (next_obs where obs belongs)",
                     "用 Q(s', a) 去和目标比（该用 obs 的地方用了 next_obs）"),
                  F.mse_loss(c(next_obs, action), reward + cfg.gamma * not_done * ct(
-                     next_obs, at(next_obs))))]
+                     next_obs, at(next_obs)))),
+                (tr("the soft updates taken first, before both steps: y from targets already "
+                    "moved toward the networks (they come after both steps)",
+                    "软更新放在了最前面、两步更新之前：y 用的是已经向当前网络靠拢过的目标网络（软更新"
+                    "应该在两步都做完之后）"),
+                 F.mse_loss(q, reward + cfg.gamma * not_done * moved(ct, c, cfg.tau)(
+                     next_obs, moved(at, a, cfg.tau)(next_obs))))] + [
+                (tr(f"{g!r} written as a number where cfg.gamma is meant (the case's gamma is "
+                    f"{cfg.gamma!r}): any other setting would be ignored",
+                    f"把 cfg.gamma 写成了数字 {g!r}（这个例子的 gamma 是 {cfg.gamma!r}）：换成别的设置"
+                    f"就不起作用了"),
+                 F.mse_loss(q, reward + g * not_done * ct(next_obs, at(next_obs))))
+                for g in (0.99, 0.98, 0.95) if g != cfg.gamma] + [
+                (tr("the Huber loss (smooth_l1_loss) where DDPG's critic minimises the squared "
+                    "error (mse_loss)", "用了 Huber 损失（smooth_l1_loss），DDPG 的评论员最小化的是"
+                    "平方误差（mse_loss）"),
+                 F.smooth_l1_loss(q, reward + cfg.gamma * not_done * ct(next_obs, at(next_obs))))]
+
+
+def moved(target, source, tau):
+    """A copy of `target` after one soft update toward `source`."""
+    target = copy.deepcopy(target)
+    importlib.import_module("ddpg_walker").soft_update(target, source, tau)
+    return target
 
 
 def ddpg_update_keeping(nets, batch, cfg, kept):
@@ -90,9 +113,12 @@ def ddpg_update_keeping(nets, batch, cfg, kept):
     ddpg.soft_update(actor_target, actor, cfg.tau)
 
 
-def ddpg_update_variant(nets, batch, cfg, y_graph=False, soft_first=False):
-    """The script's update with y computed with its graph (y_graph), or both soft updates
-    taken right after the critic's step, before the actor's (soft_first)."""
+def ddpg_update_variant(nets, batch, cfg, y_graph=False, soft_first=False, swapped=False,
+                        actor_at_next=False, joint=False):
+    """The script's update with y computed with its graph (y_graph); both soft updates taken
+    right after the critic's step, before the actor's (soft_first); soft_update's arguments
+    swapped, the networks pulled toward their targets (swapped); the actor's loss on next_obs
+    (actor_at_next); or one backward() of both losses and both steps (joint)."""
     ddpg = importlib.import_module("ddpg_walker")
     actor, critic, actor_target, critic_target, actor_opt, critic_opt = nets.values()
     obs, action, reward, next_obs, not_done = batch
@@ -101,15 +127,25 @@ def ddpg_update_variant(nets, batch, cfg, y_graph=False, soft_first=False):
                            cfg.gamma)
     critic_loss = F.mse_loss(critic(obs, action), y)
     critic_opt.zero_grad()
-    critic_loss.backward()
-    critic_opt.step()
-    for net, source in ((critic_target, critic), (actor_target, actor)) if soft_first else ():
+    if joint:  # the actor's loss on the critic before its step, one backward for both
+        actor_opt.zero_grad()
+        (critic_loss + ddpg.compute_loss_actor(actor, critic, obs)).backward()
+        critic_opt.step()
+        actor_opt.step()
+    else:
+        critic_loss.backward()
+        critic_opt.step()
+    pairs = ((critic, critic_target), (actor, actor_target)) if swapped else (
+        (critic_target, critic), (actor_target, actor))
+    for net, source in pairs if soft_first else ():
         ddpg.soft_update(net, source, cfg.tau)
-    actor_loss = ddpg.compute_loss_actor(actor, critic, obs)
-    actor_opt.zero_grad()
-    actor_loss.backward(inputs=list(actor.parameters()))
-    actor_opt.step()
-    for net, source in ((critic_target, critic), (actor_target, actor)) if not soft_first else ():
+    if not joint:  # actor_at_next: -Q(s', mu(s')), or "action": -Q(s, mu(s'))
+        actor_loss = (-critic(obs, actor(next_obs)).mean() if actor_at_next == "action" else
+                      ddpg.compute_loss_actor(actor, critic, next_obs if actor_at_next else obs))
+        actor_opt.zero_grad()
+        actor_loss.backward(inputs=list(actor.parameters()))
+        actor_opt.step()
+    for net, source in pairs if not soft_first else ():
         ddpg.soft_update(net, source, cfg.tau)
 
 
@@ -134,6 +170,27 @@ def one_update_mistakes():
     found.append((tr("both soft updates taken right after the critic's step, before the actor's: "
                      "the actor's target then lags a step behind the actor",
                      "两个软更新都放在评论员更新之后、演员更新之前了：目标演员就比演员落后一步"), nets))
+    for flag, value, label in (
+            ("swapped", True, tr(
+                "soft_update's arguments swapped: the networks pulled toward their targets "
+                "(soft_update(target, source, tau) moves its first)",
+                "soft_update 的参数顺序反了：当前网络被拉向目标网络（soft_update(target, source, tau) "
+                "改的是第一个参数）")),
+            ("actor_at_next", True, tr(
+                "the actor's loss at next_obs: -Q(s, mu(s)) is taken at the minibatch's states, "
+                "obs", "演员的损失用了 next_obs：-Q(s, mu(s)) 要在小批量的状态 obs 上算")),
+            ("actor_at_next", "action", tr(
+                "the actor's action at next_obs: -Q(s, mu(s')) where the loss is -Q(s, mu(s)), "
+                "both at the minibatch's obs", "演员的动作用了 next_obs：写成了 -Q(s, mu(s'))，损失"
+                "应该是 -Q(s, mu(s))，两处都用小批量的 obs")),
+            ("joint", True, tr(
+                "one backward() of critic_loss + actor_loss and both steps: the actor's loss "
+                "also trains the critic, and the actor learns from the critic before its step",
+                "critic_loss + actor_loss 一起 backward()、两个优化器一起 step：演员的损失也训练了"
+                "评论员，演员学的又是更新前的评论员"))):
+        nets, batch, cfg = small_ddpg()
+        ddpg_update_variant(nets, batch, cfg, **{flag: value})
+        found.append((label, nets))
     nets, batch, cfg = small_ddpg()
     ddpg_update_variant(nets, batch, cfg, y_graph=True)
     found.append((tr("y computed without torch.no_grad(): the critic's loss sends a gradient "
@@ -190,7 +247,8 @@ def worked_cases(fn):
         compare("critic_loss", got[0], expected[0])
     except Failed as e:
         named = [label for label, value in mistakes if abs(float(got[0]) - float(value)) < 1e-5]
-        raise Failed(case + str(e) + (tr("\n  this is exactly what this mistake gives: ",
+        shown = e.plain if named else str(e)
+        raise Failed(case + shown + (tr("\n  this is exactly what this mistake gives: ",
                                          "\n  你的值恰好是这个常见错误会得到的值：\n    ") + named[0]
                                       if named else "")) from None
     steps = [("critic", tr("the critic after its step", "评论员更新之后")),
@@ -238,12 +296,12 @@ def worked_cases(fn):
                                        f"(largest difference {gap(p, q):.3g}): ",
                                        f"{what}：{pname} 和脚本自己的不同（最大相差 "
                                        f"{gap(p, q):.3g}）：") + hint
-                             + (swapped_steps if name == "actor" else
-                                one_update_named(yours) if name.endswith("_target") else ""))
+                             + (swapped_steps if name == "actor" and swapped_steps else
+                                one_update_named(yours)))
     try:
         compare("actor_loss", got[1], expected[1])
     except Failed as e:
-        raise Failed(case + str(e) + swapped_steps) from None
+        raise Failed(case + (e.plain if swapped_steps else str(e)) + swapped_steps) from None
     # A second update on another minibatch, right after: what the first left in a .grad shows
     # here. The actor's backward without inputs= fills the critic's .grad too; harmless when
     # the critic's step zeroes it first (as the script's does), not when it is zeroed after.

@@ -26,16 +26,18 @@ def loop_hint():
 def grpo_by_hand(logp, logp_old, logp_ref, adv, mask, cfg, kl_reversed=False, no_mask=False,
                  token_mean=False, kl_sign=1.0, no_clip=False, ratio_one=False,
                  kl_unmasked=False, always_norm=False, k1=False, all_mean=False,
-                 inverted=False):
+                 inverted=False, use_max=False, ratio_to_ref=False):
     """The loss element by element, in plain Python (and the named mistakes' versions)."""
     eps, per_completion, total, tokens = cfg.clip_coef, [], 0.0, 0.0
     for i in range(len(adv)):
         row = 0.0
         for j in range(logp.shape[1]):
-            r = 1.0 if ratio_one else math.exp(float(logp[i, j] - logp_old[i, j]) * (
+            old = logp_ref if ratio_to_ref else logp_old
+            r = 1.0 if ratio_one else math.exp(float(logp[i, j] - old[i, j]) * (
                 -1 if inverted else 1))
             a = float(adv[i])
-            s = r * a if no_clip else min(r * a, min(max(r, 1 - eps), 1 + eps) * a)
+            pick = max if use_max else min
+            s = r * a if no_clip else pick(r * a, min(max(r, 1 - eps), 1 + eps) * a)
             x = float(logp[i, j] - logp_ref[i, j]) if kl_reversed else float(
                 logp_ref[i, j] - logp[i, j])
             d = -x if k1 else math.exp(x) - x - 1
@@ -107,6 +109,12 @@ def mistakes(logp, logp_old, logp_ref, adv, mask, cfg):
             (tr("no clip: r * A alone, without min(.., clip(r) A)",
                 "没有裁剪：只用了 r * A，没有 min(.., clip(r) A)"),
              grpo_by_hand(*args, cfg, no_clip=True)),
+            (tr("max where the pessimistic bound takes min", "用了 max，悲观的下界要取 min"),
+             grpo_by_hand(*args, cfg, use_max=True)),
+            (tr("the ratio against pi_ref, exp(logp - logp_ref), where the clipped ratio is "
+                "against pi_old (pi_ref is for the KL only)", "比值的分母用了 π_ref，即 "
+                "exp(logp - logp_ref)；裁剪的比值分母是 π_old（π_ref 只用在 KL 里）"),
+             grpo_by_hand(*args, cfg, ratio_to_ref=True)),
             (tr("the ratio upside down: pi_old / pi, exp(logp_old - logp)",
                 "比值倒过来了：π_old / π，即 exp(logp_old - logp)"),
              grpo_by_hand(*args, cfg, inverted=True)),
