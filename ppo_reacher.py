@@ -1,12 +1,13 @@
 """PPO-clip with a Gaussian policy on MuJoCo Reacher-v5 (Schulman et al. 2017): a two-joint arm
 reaching for a target, the kind of task tutorial 002's series is about, with 002's update.
 
-Read beside tutorial 002 and after ppo_cartpole.py, whose loop this one keeps. pi(a|s) is a
-Gaussian N(mu(s), sigma^2) (PolicyNetwork), log pi(a|s) its log-density summed over the action's
-dimensions (gaussian_log_prob). 002's buf.store -> RolloutBuffer.store, finish_path(last_val)
--> common.gae, buf.get -> batch_of. The loop in train():
+Read beside tutorial 002 (compute_loss_pi, compute_loss_v, update()) and after ppo_cartpole.py,
+whose loop this one keeps. With continuous actions pi(a|s) is a Gaussian N(mu(s), sigma^2)
+(PolicyNetwork), log pi(a|s) is summed over the action's dimensions (gaussian_log_prob), and
+the env gets the sample clipped to its box. 002's buf.store -> RolloutBuffer.store,
+finish_path(last_val) -> common.gae, buf.get -> batch_of. The loop in train():
 
-    collect  num_steps x num_envs transitions, a ~ N(mu(s), sigma^2), clipped to the box
+    collect  num_steps x num_envs transitions, a ~ N(mu(s), sigma^2)
     GAE      advantages A_t and value targets R_t = A_t + V(s_t)   (common.gae)
     update   tutorial 002's update(): up to train_pi_iters full-batch policy steps, stopped
              once approx_kl > 1.5 x target_kl, then train_v_iters value steps
@@ -16,13 +17,15 @@ dimensions (gaussian_log_prob). 002's buf.store -> RolloutBuffer.store, finish_p
     python ppo_reacher.py                       # 1M steps: 7 to 26 minutes on a 2-core CPU
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
-Unlike 002 (docs/why.md): normalised observations (--norm-obs), orthogonal init, the action
-clipped to the box at the env, and V bootstrapped at a time limit (gymnasium's `truncated`).
+Unlike 002 (docs/why.md): observations are normalised (--norm-obs); orthogonal init (the PPO
+reference code's); the env gets the action clipped to its box (002 passes the sample, and
+Reacher charges its control cost on it); a time limit bootstraps V (gymnasium's `truncated`).
 
 中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，和教程 002
-所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，对数概率
-在动作各维上求和；更新即教程 002 的 update()：整批数据上最多 train_pi_iters 次策略更新，approx_kl 超过
-1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络更新。
+所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，
+对数概率在动作的各维上求和；更新即教程 002 的 update()：整批数据上最多 train_pi_iters 次策略
+更新，approx_kl 超过 1.5 倍 target_kl 就早停，再做 train_v_iters 次价值网络更新。教程 002 的
+buf.store、finish_path、buf.get 分别对应 RolloutBuffer.store、common.gae、batch_of。
 """
 
 import copy
@@ -57,16 +60,19 @@ def layer_init(layer, gain=np.sqrt(2)):
 def mlp(sizes, last_gain):
     """Linear layers with tanh between them (Spinning Up's and the PPO paper's networks)."""
     layers = []
-    for n_in, n_out in zip(sizes[:-2], sizes[1:-1]):
-        layers += [layer_init(nn.Linear(n_in, n_out)), nn.Tanh()]
-    return nn.Sequential(*layers, layer_init(nn.Linear(*sizes[-2:]), last_gain))
+    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+        last = i == len(sizes) - 2
+        layers += [layer_init(nn.Linear(n_in, n_out), last_gain if last else np.sqrt(2))]
+        layers += [] if last else [nn.Tanh()]
+    return nn.Sequential(*layers)
 
 
 def gaussian_log_prob(mu, log_std, act):
     """log pi(a|s) of a diagonal Gaussian: the dimensions are independent, so their log
     densities add up (what Normal(mu, sigma).log_prob(a).sum(-1) computes):
         log pi(a|s) = sum_i [-(a_i - mu_i)^2 / (2 sigma_i^2) - log sigma_i - log(2 pi) / 2]
-    With mu = 0, sigma = 1, a = (1, 0): (-1/2 - 0.919) + (-0.919) = -2.338.
+    A worked example, one action of two dimensions, mu = 0, sigma = 1, a = (1, 0):
+    -1/2 - 0 - 0.919 = -1.419 for the first, -0.919 for the second, -2.338 in all.
 
     >>> gaussian_log_prob(torch.zeros(1, 2), torch.zeros(2), torch.tensor([[1., 0.]]))
     tensor([-2.3379])
@@ -76,10 +82,10 @@ def gaussian_log_prob(mu, log_std, act):
 
 
 class PolicyNetwork(nn.Module):
-    """pi(a|s) = N(mu(s), diag(sigma^2)): a network gives the mean; log sigma is a parameter,
-    one per action dimension, the same in every state (Spinning Up's, the PPO paper's): the
-    update lowers sigma for all states at once, where a sigma of each state's own could
-    collapse where the batch is thin."""
+    """pi(a|s) = N(mu(s), diag(sigma^2)): a network gives the mean; log sigma is a parameter of
+    its own, one per action dimension, the same in every state (Spinning Up's MLPGaussianActor,
+    the PPO paper's MuJoCo policy). Exploration then shrinks as the update lowers sigma for
+    all states at once; a sigma of each state's own could collapse where the batch is thin."""
 
     def __init__(self, obs_dim, act_dim, hidden, log_std_init):
         super().__init__()
@@ -172,10 +178,11 @@ class Config(cli.CheckpointFlags):
     """log sigma at the start: sigma = 0.61 (Spinning Up: -0.5)"""
     # --- normalisation (named options) ---
     norm_obs: bool = True
-    """feed the networks (obs - mean) / std clipped to +-10, with the statistics of the obs before
-    this rollout (CleanRL's: of every step); saved in model.pt"""
+    """feed the networks (obs - mean) / std clipped to +-10 (baselines' PPO), the statistics of
+    the obs before this rollout, held still within it (CleanRL: every step); saved in model.pt"""
     norm_reward: bool = False
-    """divide rewards by the running std of the discounted return (NormalizeReward's, no clip)"""
+    """divide rewards by the running std of the discounted return (as gymnasium's
+    NormalizeReward, no clip); saved in checkpoint.pt"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -274,9 +281,10 @@ def update(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
 
 def update_minibatch(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
     """--update minibatch: update_epochs passes of num_minibatches shuffled minibatches, a
-    policy step and a value step on each (ppo_cartpole.py's loop), with this script's losses,
-    two optimizers and early stop (checked on the whole batch before each policy step; the
-    value steps go on). Advantages are normalised over the batch (batch_of)."""
+    policy step and a value step on each: ppo_cartpole.py's (and CleanRL's) loop, with this
+    script's losses, two optimizers and early stop (checked on the whole batch before each
+    policy step; once set, the value steps go on; --target-kl none: never, as CleanRL's
+    default). Advantages are normalised over the batch (batch_of), not per minibatch."""
     pi_l_old, pi_info_old = compute_loss_pi(policy, data, cfg.clip_ratio)
     pi_l_old, v_l_old = pi_l_old.item(), compute_loss_v(value_net, data).item()
     steps, stopped = 0, False
@@ -297,9 +305,10 @@ def update_minibatch(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
 
 
 def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
-    """A rollout (T, N, ...) as one batch without the autoreset steps: obs normalized as pi_old
-    saw them, log pi_old(a|s), advantages (GAE, normalized over the batch as 002's buf.get does)
-    and value targets; and the raw obs the rollout met (for the next one's statistics)."""
+    """A rollout (T, N, ...) as one batch for the update: obs normalized as pi_old saw them,
+    log pi_old(a|s), advantages (GAE, normalized over the batch as Spinning Up's buf.get does)
+    and value targets, without the autoreset steps. Also returns the raw obs the rollout met
+    (for the statistics of the next one)."""
     raw = rollout["obs"][rollout["valid"]]
     # The statistics have not moved since the rollout began: normalising now gives the very
     # inputs pi_old acted on, so log pi_old and V can be computed here, in one batch (002's
@@ -314,7 +323,8 @@ def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
         last_value = value_net(obs_norm(torch.as_tensor(obs, dtype=torch.float32,
                                                         device=values.device)))  # V(s_T)
         next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
-        # GAE, bootstrapping at a time limit only (Reacher's episodes all end at one, 50 steps)
+        # GAE with the bootstrap at a time-limit truncation only (common.gae, as in
+        # ppo_cartpole.py; Reacher's episodes all end at its time limit, 50 steps)
         advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
                                 rollout["truncated"], cfg.gamma, cfg.lam)  # (T, N)
         returns = advantages + values  # value targets R_t = A_t + V(s_t), detached
