@@ -2,9 +2,8 @@
 reaching for a target, the kind of task tutorial 002's series is about, with 002's update.
 
 Read beside tutorial 002 (compute_loss_pi, compute_loss_v, update()) and after ppo_cartpole.py,
-whose loop this one keeps. With continuous actions pi(a|s) is a Gaussian N(mu(s), sigma^2)
-(PolicyNetwork), log pi(a|s) is summed over the action's dimensions (gaussian_log_prob), and
-the env gets the sample clipped to its box. 002's buf.store -> RolloutBuffer.store,
+whose loop this one keeps. pi(a|s) is a Gaussian N(mu(s), sigma^2) (PolicyNetwork), log pi(a|s)
+summed over the action's dimensions (gaussian_log_prob). 002's buf.store -> RolloutBuffer.store,
 finish_path(last_val) -> common.gae, buf.get -> batch_of. The loop in train():
 
     collect  num_steps x num_envs transitions, a ~ N(mu(s), sigma^2)
@@ -17,9 +16,9 @@ finish_path(last_val) -> common.gae, buf.get -> batch_of. The loop in train():
     python ppo_reacher.py                       # 1M steps: 7 to 26 minutes on a 2-core CPU
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
-Unlike 002 (docs/why.md): observations are normalised (--norm-obs); orthogonal init (the PPO
-reference code's); the env gets the action clipped to its box (002 passes the sample, and
-Reacher charges its control cost on it); a time limit bootstraps V (gymnasium's `truncated`).
+Unlike 002 (docs/why.md): normalised observations (--norm-obs), orthogonal init, the sample
+clipped to the box at the env (002 passes it, and Reacher charges its control cost on it), and
+V bootstrapped at a time limit (gymnasium's `truncated`).
 
 中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，和教程 002
 所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，
@@ -29,7 +28,6 @@ buf.store、finish_path、buf.get 分别对应 RolloutBuffer.store、common.gae�
 """
 
 import copy
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,25 +58,22 @@ def layer_init(layer, gain=np.sqrt(2)):
 def mlp(sizes, last_gain):
     """Linear layers with tanh between them (Spinning Up's and the PPO paper's networks)."""
     layers = []
-    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
-        last = i == len(sizes) - 2
-        layers += [layer_init(nn.Linear(n_in, n_out), last_gain if last else np.sqrt(2))]
-        layers += [] if last else [nn.Tanh()]
-    return nn.Sequential(*layers)
+    for n_in, n_out in zip(sizes[:-2], sizes[1:-1]):
+        layers += [layer_init(nn.Linear(n_in, n_out)), nn.Tanh()]
+    return nn.Sequential(*layers, layer_init(nn.Linear(*sizes[-2:]), last_gain))
 
 
 def gaussian_log_prob(mu, log_std, act):
     """log pi(a|s) of a diagonal Gaussian: the dimensions are independent, so their log
     densities add up (what Normal(mu, sigma).log_prob(a).sum(-1) computes):
         log pi(a|s) = sum_i [-(a_i - mu_i)^2 / (2 sigma_i^2) - log sigma_i - log(2 pi) / 2]
-    A worked example, one action of two dimensions, mu = 0, sigma = 1, a = (1, 0):
-    -1/2 - 0 - 0.919 = -1.419 for the first, -0.919 for the second, -2.338 in all.
+    With mu = 0, sigma = 1, a = (1, 0): (-1/2 - 0 - 0.919) + (-0.919) = -2.338 in all.
 
     >>> gaussian_log_prob(torch.zeros(1, 2), torch.zeros(2), torch.tensor([[1., 0.]]))
     tensor([-2.3379])
     """
     z = (act - mu) / log_std.exp()
-    return (-0.5 * z ** 2 - log_std - 0.5 * math.log(2 * math.pi)).sum(-1)  # (B,)
+    return (-0.5 * z ** 2 - log_std - 0.5 * np.log(2 * np.pi)).sum(-1)  # (B,)
 
 
 class PolicyNetwork(nn.Module):
@@ -125,8 +120,7 @@ class MeanActor(nn.Module):
 # ==== Hyperparameters: each once, here; --help shows the string under each =============
 @dataclass
 class Config(cli.CheckpointFlags):
-    """The algorithm's settings (tutorial 002's, which are Spinning Up's PPO defaults); the
-    flags all scripts share and --resume: cli.CheckpointFlags."""
+    """The algorithm's settings (tutorial 002's: Spinning Up's PPO defaults); shared flags: cli."""
     # --- experiment ---
     env_id: str = "Reacher-v5"
     """gymnasium id of a MuJoCo env (Reacher-v5; Walker2d-v5 with the settings of docs/results)"""
@@ -178,11 +172,9 @@ class Config(cli.CheckpointFlags):
     """log sigma at the start: sigma = 0.61 (Spinning Up: -0.5)"""
     # --- normalisation (named options) ---
     norm_obs: bool = True
-    """feed the networks (obs - mean) / std clipped to +-10 (baselines' PPO), the statistics of
-    the obs before this rollout, held still within it (CleanRL: every step); saved in model.pt"""
+    """feed pi and V (obs - mean) / std clipped to +-10, stats fixed in a rollout; in model.pt"""
     norm_reward: bool = False
-    """divide rewards by the running std of the discounted return (as gymnasium's
-    NormalizeReward, no clip); saved in checkpoint.pt"""
+    """divide rewards by the running std of the discounted return; saved in checkpoint.pt"""
 
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
@@ -283,8 +275,7 @@ def update_minibatch(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
     """--update minibatch: update_epochs passes of num_minibatches shuffled minibatches, a
     policy step and a value step on each: ppo_cartpole.py's (and CleanRL's) loop, with this
     script's losses, two optimizers and early stop (checked on the whole batch before each
-    policy step; once set, the value steps go on; --target-kl none: never, as CleanRL's
-    default). Advantages are normalised over the batch (batch_of), not per minibatch."""
+    policy step; then the value steps go on). Advantages are normalised over the batch."""
     pi_l_old, pi_info_old = compute_loss_pi(policy, data, cfg.clip_ratio)
     pi_l_old, v_l_old = pi_l_old.item(), compute_loss_v(value_net, data).item()
     steps, stopped = 0, False
@@ -305,10 +296,9 @@ def update_minibatch(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
 
 
 def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
-    """A rollout (T, N, ...) as one batch for the update: obs normalized as pi_old saw them,
-    log pi_old(a|s), advantages (GAE, normalized over the batch as Spinning Up's buf.get does)
-    and value targets, without the autoreset steps. Also returns the raw obs the rollout met
-    (for the statistics of the next one)."""
+    """A rollout (T, N, ...) as one batch without the autoreset steps: obs normalized as pi_old
+    saw them, log pi_old(a|s), advantages (GAE, normalized over the batch as 002's buf.get does)
+    and value targets; and the raw obs the rollout met (for the next one's statistics)."""
     raw = rollout["obs"][rollout["valid"]]
     # The statistics have not moved since the rollout began: normalising now gives the very
     # inputs pi_old acted on, so log pi_old and V can be computed here, in one batch (002's
@@ -323,8 +313,7 @@ def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
         last_value = value_net(obs_norm(torch.as_tensor(obs, dtype=torch.float32,
                                                         device=values.device)))  # V(s_T)
         next_values = torch.cat([values[1:], last_value[None]])  # (T, N)
-        # GAE with the bootstrap at a time-limit truncation only (common.gae, as in
-        # ppo_cartpole.py; Reacher's episodes all end at its time limit, 50 steps)
+        # GAE, bootstrapping at a time limit only (Reacher's episodes all end at one: 50 steps)
         advantages = common.gae(rollout["rewards"], values, next_values, rollout["terminated"],
                                 rollout["truncated"], cfg.gamma, cfg.lam)  # (T, N)
         returns = advantages + values  # value targets R_t = A_t + V(s_t), detached
