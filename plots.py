@@ -115,7 +115,7 @@ def figure(rows, logs, title, width=12, row_height=3.3, heights=None, gap=1.0):
     return fig
 
 
-def draw(run_dir, name, rows, logs, dpi=72, **layout):
+def draw(run_dir, name, rows, logs, dpi=96, **layout):
     """Write run_dir/<name>, the figure of `rows` (figure(); `layout`: its width, row_height,
     heights, gap); returns its path."""
     run_dir = Path(run_dir)
@@ -259,7 +259,7 @@ def episode_returns(window, solved_return=None, solved_step=None):
             ax.axvline(solved_step, color="C2", ls=":", lw=1.5,
                        label=f"solved at step {solved_step}")
         ax.set(xlabel="env steps", ylabel="return")
-        ax.legend(loc="upper left", fontsize=8)
+        legend_above(ax)
     return 1, fill
 
 
@@ -278,8 +278,26 @@ def evaluation_returns():
         series(ax, x, table["train_return_mean10"], warm, color="C1", lw=1,
                label=labels.get("train_return_mean10", "train_return_mean10"))
         ax.set(xlabel="env steps", ylabel="return")
-        ax.legend(loc="upper left", fontsize=8)
+        legend_above(ax)
     return 1, fill
+
+
+def legend_above(ax, handles=None, title=None, on=None):
+    """The legend of `ax` over it, in one row, covering no line, `title` above it; where the
+    row would be wider than the axis, inside the axis where it covers the least (matplotlib's
+    "best"). `on`: the axis to draw it on (the one drawn last, where a right-hand axis shares
+    ax)."""
+    handles = handles or ax.get_legend_handles_labels()[0]
+    points = sum(4 * len(h.get_label()) + 30 for h in handles)  # 7-point text
+    if 72 * ax.get_position().width * ax.figure.get_figwidth() > points:
+        (on or ax).legend(handles=handles, fontsize=7, loc="lower left", bbox_to_anchor=(0, 1),
+                          ncol=max(len(handles), 1), frameon=False, borderaxespad=0.2)
+        if title:
+            ax.set_title(title, fontsize=9, pad=16)
+        return
+    (on or ax).legend(handles=handles, fontsize=7, loc="best")
+    if title:
+        ax.set_title(title, fontsize=9)
 
 
 def warm_up_shaded(ax, steps, warm_up):
@@ -308,7 +326,7 @@ def axis_label(columns, labels, given):
 
 def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_log=True,
           log=False, ylim=None, between=None, hlines=(), steps=False, dashed=(), within=None,
-          where=None, x="global_step", x_of=None, xlabel="env steps", legend="upper left",
+          where=None, x="global_step", x_of=None, xlabel="env steps", legend="above",
           coloured_by=None):
     """Panel: `columns` of the run's table over env steps, labelled as declared; `ylabel`:
     what they measure (one column: its declared label unless given; several: name the one
@@ -325,10 +343,9 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
     `xlabel`: what x is; `log`: a log y axis, or "wide": one where the values drawn span a
     factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`:
-    where the legend goes in the axis, or "above" it (in a row, over no line, the title above
-    it); `coloured_by`: (column, label): each row a point, not joined, coloured by that
-    column (a colour bar, `label`, says how), a marker per column (the legend's, in grey,
-    says which)."""
+    "above" the axis (legend_above), or where it goes in the axis; `coloured_by`: (column,
+    label): each row a point, not joined, coloured by that column (a colour bar, `label`, says
+    how), a marker per column (the legend's, in grey, says which)."""
     def fill(axes, logs):
         ax, table, labels = axes[0], logs["table"], logs["labels"]
         needed = (*columns, *right, x, *([where[0]] if where else []))
@@ -402,14 +419,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
             bar.set_label(coloured_by[1], fontsize=7)
             bar.ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # steps: whole numbers
         handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
-        if handles and legend == "above":  # over the axis, covering no line; the title above it
-            points = sum(4 * len(h.get_label()) + 30 for h in handles)  # 7-point text
-            wide = 72 * ax.get_position().width * ax.figure.get_figwidth() > points
-            ncol = len(handles) if wide else 1  # else one under another
-            top.legend(handles=handles, fontsize=7, loc="lower left", bbox_to_anchor=(0, 1),
-                       ncol=ncol, frameon=False, borderaxespad=0.2)
-            if title:
-                ax.set_title(title, fontsize=9, pad=6 + 10 * -(-len(handles) // ncol))
+        if handles and legend == "above":
+            legend_above(ax, handles, title, top)
         elif handles:  # on the axis drawn last, above every line
             shown = top.legend(handles=handles, fontsize=7, loc=legend)
             if coloured:  # the marker says which column; the colour is the colour bar's
@@ -472,10 +483,9 @@ def spread(prefix, title, hlines=(), ylabel=None):
         ax.plot(x, table[f"{prefix}_median"], color="C0", lw=1, label="median")
         for y in hlines:
             ax.axhline(y, color="k", ls="--", lw=0.8)
-        ax.set_title(title, fontsize=9)
         ax.set_xlabel("env steps")
         ax.set_ylabel(ylabel or prefix, fontsize=8)
-        ax.legend(fontsize=7, loc="upper right")
+        legend_above(ax, title=title)
     return 1, fill
 
 

@@ -52,9 +52,9 @@ def draw_pictures(run, pictures, top=None, maps=None):
     rows = pictures.get("curve", [])
     if top is not None:  # the returns on top, the rows under it lower
         curve = plots.draw(run.dir, "curve.png", [[top], *rows], logs, width=7,
-                           heights=[3.2] + [1.6] * len(rows), dpi=90)
+                           heights=[3.2] + [1.6] * len(rows), dpi=96)
     else:  # the rows alone
-        curve = plots.draw(run.dir, "curve.png", rows, logs, width=10, dpi=90)
+        curve = plots.draw(run.dir, "curve.png", rows, logs, width=10, dpi=96)
     rows = list(pictures.get("inside", []))
     if maps is not None:
         rows.append([plots.maps_row(maps)])

@@ -133,6 +133,6 @@ def test_english_pictures_are_drawn_as_before(tmp_path, capsys, monkeypatch):
     monkeypatch.undo()  # plots.in_chinese itself
     plots.draw(run, "drawn.png", rows, logs)
     fig = plots.figure(rows, logs, run.name)
-    fig.savefig(run / "alone.png", dpi=72)
+    fig.savefig(run / "alone.png", dpi=96)  # plots.draw's
     plots.pyplot().close(fig)
     assert (run / "drawn.png").read_bytes() == (run / "alone.png").read_bytes()
