@@ -249,11 +249,12 @@ def effect(got, expected):
     shift = got - expected
     if expected.numel() > 1 and torch.allclose(shift, shift.reshape(-1)[0].expand_as(shift),
                                                 atol=1e-5, rtol=1e-5):
-        return named(tr(f"the right result shifted by {shift.reshape(-1)[0].item():.4g} "
-                        f"everywhere: a constant term added, dropped or counted a wrong number "
-                        f"of times",
-                        f"处处比正确结果多了 {shift.reshape(-1)[0].item():.4g}：多加、漏掉了一个常数项，"
-                        f"或者它被算错了次数"))
+        return named(tr(f"the right result shifted by {shift.reshape(-1)[0].item():.4g} at "
+                        f"every entry: a term that takes one value at every entry here (a "
+                        f"constant, or a difference these inputs keep equal) added, dropped or "
+                        f"wrong", f"每一项都比正确结果多了 {shift.reshape(-1)[0].item():.4g}：某一项在"
+                        f"这个例子里处处取同一个值（常数，或者这些输入让它处处相等的差），它被多加了、"
+                        f"漏掉了或者算错了"))
     return ""
 
 

@@ -25,7 +25,7 @@ EXPECTED = torch.tensor([[1.5, 2.0], [1.0, -3.0], [0.5, 4.0]])
     (-EXPECTED, "the right result with its sign flipped"),
     (EXPECTED / 3, "1/3 times the right result everywhere"),
     (EXPECTED * 2, "2 times the right result everywhere"),
-    (EXPECTED + 0.25, "shifted by 0.25 everywhere"),
+    (EXPECTED + 0.25, "shifted by 0.25 at every entry"),
 ])
 def test_an_effect_plain_from_the_numbers_is_named(got, words):
     assert words in checking.effect(got, EXPECTED)

@@ -194,6 +194,12 @@ WRONG = {
                 if d > cfg.d_targ * cfg.kl_tolerance:
                     return beta * cfg.beta_factor
                 return beta""", "(a)", "<= at the band's lower edge"),
+        ("""def adapt_beta(beta, d, cfg):  # no band: against d_targ itself (was named as <=)
+                if d < cfg.d_targ:
+                    return beta / cfg.beta_factor
+                if d > cfg.d_targ:
+                    return beta * cfg.beta_factor
+                return beta""", "(a)", "no band: d compared with d_targ itself"),
         ("""def adapt_beta(beta, d, cfg):  # the tolerance as the factor
                 if d < cfg.d_targ / cfg.kl_tolerance:
                     return beta / cfg.kl_tolerance

@@ -28,8 +28,8 @@ def cases():
     other = SimpleNamespace(d_targ=0.02, kl_tolerance=1.25, beta_factor=3.0)
     return [(tr(f"beta = 1, d = {d:g} (d_targ = 0.01, tolerance 1.5, factor 2)",
                 f"β = 1，d = {d:g}（d_targ = 0.01，容差 1.5，倍数 2）"), (1.0, d, paper),
-             expected) for d, expected in ((0.001, 0.5), (0.02, 2.0), (0.01, 1.0),
-                                           (0.01 / 1.5, 1.0), (0.01 * 1.5, 1.0))] + [
+             expected) for d, expected in ((0.001, 0.5), (0.02, 2.0), (0.01, 1.0), (0.008, 1.0),
+                                           (0.012, 1.0), (0.01 / 1.5, 1.0), (0.01 * 1.5, 1.0))] + [
             (tr(f"beta = 1, d = {d:g} (d_targ = 0.02, tolerance 1.25, factor 3)",
                 f"β = 1，d = {d:g}（d_targ = 0.02，容差 1.25，倍数 3）"), (1.0, d, other),
              expected) for d, expected in ((0.001, 1 / 3), (0.014, 1 / 3), (0.02, 1.0),
@@ -66,7 +66,14 @@ def mistakes(beta, d, cfg):
             for right, swapped in [(adapted(beta, d, cfg.d_targ, cfg.kl_tolerance,
                                             cfg.beta_factor),
                                     adapted(beta, d, cfg.d_targ, cfg.beta_factor,
-                                            cfg.kl_tolerance))]]
+                                            cfg.kl_tolerance))]] + [
+            (tr("no band: d compared with d_targ itself, where beta stays put between "
+                "d_targ / cfg.kl_tolerance and d_targ * cfg.kl_tolerance",
+                "没有容差区间：d 直接和 d_targ 比较；d 在 d_targ / cfg.kl_tolerance 到 "
+                "d_targ * cfg.kl_tolerance 之间时 β 应该不变"), only_if(no_band != right, no_band))
+            for right, no_band in [(adapted(beta, d, cfg.d_targ, cfg.kl_tolerance,
+                                            cfg.beta_factor),
+                                    adapted(beta, d, cfg.d_targ, 1.0, cfg.beta_factor))]]
 
 
 def adapted(beta, d, d_targ, tolerance, factor):
