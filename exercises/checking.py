@@ -239,9 +239,9 @@ def effect(got, expected):
         c = ratio[0].item()
         simple = [f"{n}" for n in range(2, 65) if abs(c - n) < 1e-4 * n] + [
             f"1/{n}" for n in range(2, 65) if abs(c - 1 / n) < 1e-4 / n]
-        if expected.numel() == 1 and not simple:
-            return ""  # any wrong number is some multiple of a single right one
-        times = simple[0] if simple else f"{c:.4g}"
+        if not simple:  # any wrong number is some multiple of a single right one, and a
+            return ""  # factor near 1 is more likely a small term than a scale
+        times = simple[0]
         return named(tr(f"{times} times the right result everywhere: a sum where a mean is "
                         f"meant (or a mean where a sum is), or a factor missing or added",
                         f"处处都是正确结果的 {times} 倍：该求平均的地方求了和（或者反过来），或者少了、"
