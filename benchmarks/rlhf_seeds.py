@@ -22,6 +22,7 @@ already there is skipped.
     nice -n 10 python benchmarks/rlhf_seeds.py --grpo    # GRPO beside, seeds 0-4
     nice -n 10 python benchmarks/rlhf_seeds.py --judge   # the control (PPO on the judge), 0-4
     python benchmarks/rlhf_seeds.py --plot               # the figure, from the records
+    python benchmarks/rlhf_seeds.py --plot --lang zh     # its Chinese twin (.zh-CN.png)
     python benchmarks/rlhf_seeds.py --table              # the page's table, from the record
 """
 
@@ -199,13 +200,18 @@ def overopt_has(name, path=CURVES):
     return any(r["run"] == name for r in csv.DictReader(open(path)))
 
 
-def plot():
+def plot(chinese=False):
     """docs/rlhf_overoptimisation.png: learned reward and true score of PPO's samples against
-    sqrt(KL to the supervised model), seed 0 at beta 0.1 (default) and at beta 1."""
+    sqrt(KL to the supervised model), seed 0 at beta 0.1 (default) and at beta 1; `chinese`:
+    its words from locale/output.zh-CN.md, as .zh-CN.png."""
     sys.path.insert(0, str(ROOT))
     import numpy as np
 
+    import help_zh
     import plots
+
+    if chinese:
+        help_zh.print_in_chinese()
 
     rows = list(csv.DictReader(open(CURVES)))
     plt = plots.pyplot()
@@ -224,13 +230,15 @@ def plot():
         ax.legend(fontsize=7)
     fig.suptitle("PPO's sampled answers, seed 0, one dot per PPO step", fontsize=9)
     fig.tight_layout()
-    plots.save_whole(plt, fig, FIGURE, dpi=90)
-    print(f"wrote {FIGURE}")
+    path = FIGURE.with_suffix(".zh-CN.png") if chinese else FIGURE
+    plots.save_whole(plt, fig, path, dpi=90)
+    print(f"wrote {path}")
 
 
 def main():
     if "--plot" in sys.argv:
-        return plot()
+        return plot(chinese="--lang" in sys.argv and sys.argv[sys.argv.index("--lang") + 1:][:1]
+                    == ["zh"])
     if "--table" in sys.argv:
         cells, seeds = summary()
         print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))
