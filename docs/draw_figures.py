@@ -4,6 +4,7 @@ and TD3's Q against the discounted return side by side, from the committed evalu
 two runs (seed 0, the defaults, the same first 200,000 steps), for docs/inside.md.
 
     python docs/draw_figures.py     # writes docs/ppo_clip_objective.png, docs/inside_td3_ddpg.png
+    python docs/draw_figures.py --lang zh   # their Chinese twins, *.zh-CN.png
 """
 
 import sys
@@ -15,6 +16,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import ddpg_walker  # noqa: E402
+import help_zh  # noqa: E402
 import plots  # noqa: E402
 
 
@@ -59,11 +61,10 @@ def draw_q_against_return(path, upto=200_000):
         keep = table["global_step"] <= upto
         table = {k: v[keep] for k, v in table.items()}
         labels = {k: what for k, (_, what) in ddpg_walker.LOGGED.items()}
-        plots.lines("q_estimate", "discounted_return")[1]([ax], dict(table=table, labels=labels))
+        plots.lines("q_estimate", "discounted_return")[1](  # the warm-up shaded, its point
+            [ax], dict(table=table, labels=labels, warm_up=25_000))  # not joined to the rest
         for line in ax.get_lines():
-            line.set_marker(".")  # one point per evaluation; none during the warm-up
-        ax.axvspan(0, 25_000, color="gray", alpha=0.12, label="random warm-up")
-        ax.legend(fontsize=7, loc="upper left")
+            line.set_marker(".")  # one point per evaluation
         ax.set_title(f"{name}, Walker2d-v5, seed 0, the first {upto:,} steps", fontsize=9)
     axes[0].set_ylabel("mean over the states of\nthe evaluation episodes", fontsize=8)
     fig.tight_layout()
@@ -71,5 +72,9 @@ def draw_q_against_return(path, upto=200_000):
 
 
 if __name__ == "__main__":
-    print(draw_clip_objective(ROOT / "docs" / "ppo_clip_objective.png"))
-    print(draw_q_against_return(ROOT / "docs" / "inside_td3_ddpg.png"))
+    zh = sys.argv[1:] == ["--lang", "zh"]  # the words from locale/output.zh-CN.md
+    if zh:
+        help_zh.print_in_chinese()
+    suffix = ".zh-CN.png" if zh else ".png"
+    print(draw_clip_objective(ROOT / "docs" / f"ppo_clip_objective{suffix}"))
+    print(draw_q_against_return(ROOT / "docs" / f"inside_td3_ddpg{suffix}"))
