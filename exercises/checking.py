@@ -111,17 +111,22 @@ CAUSES = [
         "an in-place operation (+=, x[i] = ..., .add_()) on a tensor that autograd needs for "
         "the gradient: write it as a new tensor (x = x + ...)",
         "对自动求导要用的张量做了原地操作（+=、x[i] = ...、.add_()）：改成新建一个张量（x = x + ...）")),
+    (("out of bounds", "index out of range", "list index out of range"), (
+        "an index past the end (or before the start): one computed a step too far, e.g. a "
+        "length used as the last index (the last of n is n - 1)",
+        "下标越界：算出来的下标多走了一步，例如把长度当成了最后一个下标（n 个里最后一个是 n - 1）")),
     (("must match the size", "size of tensor", "shape", "mat1 and mat2", "Expected size",
-      "dimension", "too many indices", "out of range", "expand"), (
-        "a shape error: two tensors whose shapes do not fit (print each one's .shape; a (B,) "
-        "against a (B, L) needs adv[:, None])",
-        "形状错误：两个张量的形状对不上（把它们的 .shape 打印出来；(B,) 和 (B, L) 相乘要写 "
-        "adv[:, None]）")),
+      "dimension", "too many indices", "expand"), (
+        "a shape error: two tensors whose shapes do not fit (print each one's .shape at that "
+        "line)",
+        "形状错误：两个张量的形状对不上（在那一行把它们的 .shape 打印出来）")),
     (("dtype", "scalar type", "Long", "Bool"), (
         "a dtype error: tensors of different types (float against long or bool, float64 "
-        "against float32): .float(), or dtype=torch.float32 where you make one",
-        "类型错误：张量的 dtype 不一样（float 对 long 或 bool，float64 对 float32）：用 .float()，"
-        "或者新建张量时写 dtype=torch.float32")),
+        "against float32); where a long one is unexpected, see where it comes from (an index: "
+        "argmax, max(...)[1], gather's index) before converting it",
+        "类型错误：张量的 dtype 不一样（float 对 long 或 bool，float64 对 float32）；不该出现 long "
+        "的地方出现了 long，先看它从哪里来（下标：argmax、max(...)[1]、gather 的下标），再决定要不要"
+        "转换")),
     (("device", "CUDA", "cuda"), (
         "a device error: tensors on different devices: make new ones where the inputs are "
         "(torch.zeros_like(x), or device=x.device)",
@@ -202,9 +207,11 @@ def compare(name, got, expected):
 
 def effect(got, expected):
     """What a wrong tensor `got` is, where that is plain from the numbers alone, as a named line
-    (or ''): the right values in another shape, a (B, 1) broadcast against a (B,), the right
-    result with its sign flipped, times one factor, or shifted by one amount everywhere. These
-    are facts about the answer's numbers in this case, never a guess at another mistake."""
+    (or ''): the right values in another shape or in reverse order, a (B, 1) broadcast against
+    a (B,), the right result with its sign flipped or times a whole number (or one over one).
+    These are facts about the answer's numbers in this case, not a guess at another mistake.
+    (A shift by one amount everywhere is not said: in a case whose inputs keep a difference
+    equal, swapped terms give one too.)"""
     got, expected = got.detach().double(), expected.double()
     if got.shape != expected.shape:
         if got.numel() == expected.numel() and torch.allclose(
@@ -246,15 +253,6 @@ def effect(got, expected):
                         f"meant (or a mean where a sum is), or a factor missing or added",
                         f"处处都是正确结果的 {times} 倍：该求平均的地方求了和（或者反过来），或者少了、"
                         f"多了一个系数"))
-    shift = got - expected
-    if expected.numel() > 1 and torch.allclose(shift, shift.reshape(-1)[0].expand_as(shift),
-                                                atol=1e-5, rtol=1e-5):
-        return named(tr(f"the right result shifted by {shift.reshape(-1)[0].item():.4g} at "
-                        f"every entry: a term that takes one value at every entry here (a "
-                        f"constant, or a difference these inputs keep equal) added, dropped or "
-                        f"wrong", f"每一项都比正确结果多了 {shift.reshape(-1)[0].item():.4g}：某一项在"
-                        f"这个例子里处处取同一个值（常数，或者这些输入让它处处相等的差），它被多加了、"
-                        f"漏掉了或者算错了"))
     return ""
 
 

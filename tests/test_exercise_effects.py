@@ -1,6 +1,6 @@
 """A wrong answer that no listed mistake gives is still named where its numbers alone say what it
 is: the right values in another shape or in reverse time order, a (B, 1) broadcast against a
-(B,), the right result with its sign flipped, times one factor, or shifted by one amount; and a
+(B,), the right result with its sign flipped or times a whole number (or one over one); and a
 gradient that is cut or sent where none belongs says which input. Each is a fact about the
 answer's numbers, so it never names another mistake; a number that is merely wrong gets none."""
 
@@ -25,7 +25,6 @@ EXPECTED = torch.tensor([[1.5, 2.0], [1.0, -3.0], [0.5, 4.0]])
     (-EXPECTED, "the right result with its sign flipped"),
     (EXPECTED / 3, "1/3 times the right result everywhere"),
     (EXPECTED * 2, "2 times the right result everywhere"),
-    (EXPECTED + 0.25, "shifted by 0.25 at every entry"),
 ])
 def test_an_effect_plain_from_the_numbers_is_named(got, words):
     assert words in checking.effect(got, EXPECTED)
@@ -40,6 +39,7 @@ def test_a_broadcast_to_b_by_b_is_named_and_a_number_merely_wrong_is_not():
     assert checking.effect(wrong, EXPECTED) == ""
     assert checking.effect(torch.tensor(0.7), torch.tensor(0.3)) == ""  # any factor: not said
     assert checking.effect(torch.tensor(0.6), torch.tensor(0.3)) != ""  # 2 exactly: said
+    assert checking.effect(EXPECTED + 0.25, EXPECTED) == ""  # a shift: swapped terms give one
 
 
 @pytest.mark.quick

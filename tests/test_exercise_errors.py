@@ -50,6 +50,12 @@ RAISING = {
     "type": ("td_target", TD.format("reward + gamma * not_done * next_q(0)"),
              "your code raised TypeError at td_target.py line 2 (return reward",
              "'Tensor' object is not callable"),
+    "index": ("td_target", TD.format("reward + gamma * not_done * next_q[len(next_q)]"),
+              "line 2 (return reward", "an index past the end"),
+    # torch's own NotImplementedError is the answer's error, not the blank's "not written yet"
+    "not-implemented": ("td_target", TD.format(
+        "reward + gamma * not_done * kl_divergence(next_q, next_q)"),
+        "your code raised NotImplementedError at td_target.py line 2", "No KL(p || q)"),
 }
 
 
