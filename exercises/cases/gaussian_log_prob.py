@@ -54,11 +54,11 @@ def cases():
 
 
 def variant(mu, log_std, act, reduce="sum", sigma=None, square=True, log_sigma=1.0,
-            constant=True, quadratic_sign=-1.0):
-    """log pi as a known mistake computes it."""
+            constant=1.0, quadratic_sign=-1.0):
+    """log pi as a known mistake computes it (`constant`: how many halves of log(2 pi))."""
     s = log_std.exp() if sigma is None else sigma(log_std)
     quadratic = quadratic_sign * (act - mu) ** 2 / (2 * (s ** 2 if square else s))
-    per_dim = quadratic - log_sigma * log_std - (0.5 * math.log(2 * math.pi) if constant else 0)
+    per_dim = quadratic - log_sigma * log_std - constant * 0.5 * math.log(2 * math.pi)
     return dict(sum=lambda x: x.sum(-1), mean=lambda x: x.mean(-1), none=lambda x: x,
                 batch=lambda x: x.sum(0))[reduce](
         per_dim)
@@ -85,7 +85,10 @@ def mistakes(mu, log_std, act):
             "would not integrate to 1)",
             "每一维都漏了常数 log(2π)/2：PPO 的比值不会变（它在 log π - log π_old 里消掉了），"
             "\n    但这个值不是 log π（这样的密度积分不为 1）"),
-         variant(mu, log_std, act, constant=False)),
+         variant(mu, log_std, act, constant=0.0)),
+        (tr("log(2 pi) where each dimension's constant is log(2 pi) / 2 (the 1 / sqrt(2 pi) "
+            "of the density)", "每一维的常数写成了 log(2π)，应该是 log(2π)/2（密度里的 "
+            "1 / sqrt(2π)）"), variant(mu, log_std, act, constant=2.0)),
         (tr("the sign of the square term: +(a - mu)^2 / (2 sigma^2), where the density falls "
             "away from the mean", "平方项的符号反了：写成了 +(a - mu)^2 / (2 sigma^2)，密度离均值越远"
             "越低"), variant(mu, log_std, act, quadratic_sign=1.0)),
