@@ -104,9 +104,11 @@ CAUSES = [
         "同一个计算图反向传播了两次：损失只算了一次，却用在几次更新里；每次 backward() 之前都要重新"
         "算一遍损失")),
     (("is ambiguous",), (
-        "`and`, `or` or `not` on a tensor or array of several values: write `&`, `|`, `~` "
-        "(element by element)",
-        "对含有多个值的张量或数组用了 and、or、not：要写成 &、|、~（逐个元素）")),
+        "a tensor or array of several values where Python wants one truth value (`if`, `and`, "
+        "`or`, `not` on it): element by element, write `&`, `|`, `~`, or torch.where(cond, a, "
+        "b) for an `if`",
+        "在 Python 需要一个真假值的地方用了含多个值的张量或数组（对它用了 if、and、or、not）："
+        "要逐个元素计算，写 &、|、~，`if` 要写成 torch.where(cond, a, b)")),
     (("modified by an inplace operation", "in-place operation"), (
         "an in-place operation (+=, x[i] = ..., .add_()) on a tensor that autograd needs for "
         "the gradient: write it as a new tensor (x = x + ...)",

@@ -283,11 +283,11 @@ def worked_cases(fn):
                 hint = dict(
                     critic=tr("one critic step toward y (critic_opt.zero_grad(), backward, step)",
                               "朝 y 做一步评论员更新（critic_opt.zero_grad()、backward、step）"),
-                    actor=tr("the actor's step comes after the critic's, on the updated critic, "
-                             "and changes only the actor (backward(inputs=actor's parameters) "
-                             "or zero the critic's gradients)",
-                             "演员在评论员更新之后、用更新过的评论员来更新，并且只改演员"
-                             "（backward(inputs=演员的参数)，或者清掉评论员的梯度）"),
+                    actor=tr("what it should be: one step on -mean Q(s, mu(s)) of the critic "
+                             "just updated (not a target), at the minibatch's obs, changing "
+                             "only the actor",
+                             "应该是：在小批量的 obs 上，对刚更新过的评论员（不是目标网络）的 "
+                             "-mean Q(s, mu(s)) 做一步，只改演员"),
                     critic_target=tr("soft_update(critic_target, critic, tau) after both steps",
                                      "两步都做完之后 soft_update(critic_target, critic, tau)"),
                     actor_target=tr("soft_update(actor_target, actor, tau) after both steps",
