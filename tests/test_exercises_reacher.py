@@ -118,6 +118,21 @@ WRONG = {
          "80, the script's default, written as a number where cfg.train_v_iters"),
         (update_body().replace("loss_pi, policy, cfg.max_grad_norm", "loss_pi, policy, 0.0"),
          "the policy network after the update: log_std differs"),
+        (update_body().replace("range(cfg.train_v_iters)", "range(cfg.train_pi_iters)"),
+         "the value loop counted with train_pi_iters"),
+        ("""
+        pi_l_old, pi_info_old = compute_loss_pi(policy, data, cfg.clip_ratio)
+        pi_l_old, v_l_old = pi_l_old.item(), compute_loss_v(value_net, data).item()
+        stop_iter = cfg.train_pi_iters
+        for i in range(cfg.train_pi_iters):  # one value step with each policy step
+            loss_pi, pi_info = compute_loss_pi(policy, data, cfg.clip_ratio)
+            if cfg.target_kl is not None and pi_info["kl"] > cfg.kl_stop_factor * cfg.target_kl:
+                stop_iter = i
+                break
+            step(pi_optimizer, loss_pi, policy, cfg.max_grad_norm)
+            step(vf_optimizer, compute_loss_v(value_net, data), value_net, cfg.max_grad_norm)
+        return pi_l_old, v_l_old, pi_info_old["ent"], stop_iter""",
+         "one value step after each policy step, inside the policy loop"),
     ],
 }
 

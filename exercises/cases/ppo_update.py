@@ -69,7 +69,7 @@ def cases():
 
 
 def variant(policy, value_net, pi_optimizer, vf_optimizer, data, cfg, check="before",
-            factor=True, kl="new", values="after", plus_one=False, go_on=False):
+            factor=True, kl="new", values="after", plus_one=False, go_on=False, v_iters=None):
     """The update as a known mistake writes it (the defaults: the script's own)."""
     ppo = script()
     pi_l_old, pi_info_old = ppo.compute_loss_pi(policy, data, cfg.clip_ratio)
@@ -78,8 +78,8 @@ def variant(policy, value_net, pi_optimizer, vf_optimizer, data, cfg, check="bef
         cfg.kl_stop_factor * cfg.target_kl if factor else cfg.target_kl)
     stop_iter, stopped = cfg.train_pi_iters, False
 
-    def value_steps():
-        for _ in range(cfg.train_v_iters):
+    def value_steps(n=None):
+        for _ in range(n or getattr(cfg, v_iters or "train_v_iters")):
             ppo.step(vf_optimizer, ppo.compute_loss_v(value_net, data), value_net,
                      cfg.max_grad_norm)
 
@@ -95,6 +95,8 @@ def variant(policy, value_net, pi_optimizer, vf_optimizer, data, cfg, check="bef
         ppo.step(pi_optimizer, loss_pi, policy, cfg.max_grad_norm)
         if values == "inside":
             value_steps()
+        if values == "one_each":
+            value_steps(1)
         if past:  # check == "after": this step was taken all the same
             stop_iter, stopped = i, True
             break
@@ -120,6 +122,14 @@ MISTAKES = [
                 "policy step; they come once, after the policy's loop",
                 "价值更新放进了策略的循环里：每次策略更新后都做 train_v_iters 步；应该在策略的循环"
                 "结束后做一次"), dict(values="inside"), ("middle", "never")),
+    (lambda: tr("one value step after each policy step, inside the policy loop: V takes as many "
+                "steps as pi (none after an early stop at once), where it takes train_v_iters, "
+                "after the loop", "每次策略更新后做一步价值更新，放在策略的循环里：V 走的步数和 π "
+                "一样多（一开始就早停时一步也没有），应该是在循环之后做 train_v_iters 步"),
+     dict(values="one_each"), ("middle", "at once", "never")),
+    (lambda: tr("the value loop counted with train_pi_iters, where V takes train_v_iters steps",
+                "价值更新的循环次数用了 train_pi_iters，应该是 train_v_iters"),
+     dict(v_iters="train_pi_iters"), ("middle", "at once", "never")),
     (lambda: tr("approx_kl from the info before the update (pi_info_old): it does not move as pi "
                 "moves; use the pi_info of this step's compute_loss_pi",
                 "approx_kl 用了更新前的 pi_info_old：它不随 π 变化；要用这一步 compute_loss_pi 给出"
