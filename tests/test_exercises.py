@@ -959,6 +959,9 @@ WRONG.setdefault("gaussian_log_prob", []).append(("""def gaussian_log_prob(mu, l
         z = (act - mu) / log_std.exp()
         return (-0.5 * z ** 2 - log_std - 0.5 * math.log(2 * math.pi)).sum(0)""", "(a)",
     EXACTLY + "summed over the batch (.sum(0), axis 0)"))
+WRONG["a2c_targets"] += [(script_with(  # the last step wraps round to V(s_0)
+    "a2c_targets", "torch.cat([values[1:], last_value[None]])", "torch.roll(values, -1, 0)"),
+    "(a)", EXACTLY + "values rolled (torch.roll(values, -1, 0))")]
 WRONG["gaussian_log_prob"].append((script_with(  # log(2 pi) per dimension, not its half
     "gaussian_log_prob", "0.5 * np.log(2 * np.pi)", "np.log(2 * np.pi)"), "(a)",
     EXACTLY + "log(2 pi) where each dimension's constant is log(2 pi) / 2"))

@@ -81,7 +81,14 @@ def a2c_targets_mistakes(rollout, values, last):
              with_next(torch.cat([values[1:], torch.zeros_like(last)[None]]))),
             (tr("shifted the wrong way: V(next_obs) put first, torch.cat([last, values[:-1]])",
                 "错开的方向反了：把 V(next_obs) 放在了最前面，torch.cat([last, values[:-1]])"),
-             with_next(torch.cat([last[None], values[:-1]])))]
+             with_next(torch.cat([last[None], values[:-1]]))),
+            (tr("values rolled (torch.roll(values, -1, 0)): the last step's V(s_{t+1}) wraps "
+                "round to V(s_0), where it is V(next_obs)",
+                "对 values 做了 torch.roll(values, -1, 0)：最后一步的 V(s_{t+1}) 绕回成了 V(s_0)，"
+                "应该是 V(next_obs)"), with_next(torch.roll(values, -1, 0))),
+            (tr("values[-1] repeated for the last step's V(s_{t+1}), where it is V(next_obs)",
+                "最后一步的 V(s_{t+1}) 重复用了 values[-1]，应该是 V(next_obs)"),
+             with_next(torch.cat([values[1:], values[-1:]])))]
 
 
 def worked_cases(fn):
