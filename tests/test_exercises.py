@@ -962,6 +962,8 @@ WRONG.setdefault("gaussian_log_prob", []).append(("""def gaussian_log_prob(mu, l
 WRONG["a2c_targets"] += [(script_with(  # the last step wraps round to V(s_0)
     "a2c_targets", "torch.cat([values[1:], last_value[None]])", "torch.roll(values, -1, 0)"),
     "(a)", EXACTLY + "values rolled (torch.roll(values, -1, 0))")]
+WRONG["gae"] += [(script_with("gae", "    return advantages", "    return advantages + values"),
+                  "(a)", EXACTLY + "the value targets A_t + V(s_t) returned")]
 WRONG["gaussian_log_prob"].append((script_with(  # log(2 pi) per dimension, not its half
     "gaussian_log_prob", "0.5 * np.log(2 * np.pi)", "np.log(2 * np.pi)"), "(a)",
     EXACTLY + "log(2 pi) where each dimension's constant is log(2 pi) / 2"))

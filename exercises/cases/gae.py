@@ -84,7 +84,11 @@ def mistakes(r, v, nv, term, trunc, gamma, lam):
     carried = (~(term | trunc))[:-1].any()  # some A_{t+1} is added in
     right = gae_with(r, v, nv, term, trunc, gamma, lam)
     swapped = gae_with(r, v, nv, term, trunc, gamma, lam, swapped=True)
-    return [(tr("gamma and lambda swapped: lambda in delta (r + lambda * V(s') - V(s)) and gamma "
+    return [(tr("the value targets A_t + V(s_t) returned, where gae returns the advantages A_t "
+                "(the loop adds V(s_t) itself, for the targets)", "返回的是价值目标 A_t + V(s_t)，"
+                "gae 返回的是优势 A_t（循环自己再加上 V(s_t) 得到目标）"),
+             only_if(bool((v != 0).any()), right + v)),
+            (tr("gamma and lambda swapped: lambda in delta (r + lambda * V(s') - V(s)) and gamma "
                 "alone in the sum; delta discounts by gamma, the sum by gamma * lambda",
                 "gamma 和 lambda 弄反了：delta 里用了 lambda（r + lambda * V(s') - V(s)），累加时只乘"
                 "了 gamma；delta 用 gamma 打折，累加用 gamma * lambda"),
