@@ -98,12 +98,12 @@ def figure(rows, logs, title, width=12, row_height=3.3, heights=None, gap=1.0):
              for row in rows]
     width = max([width] + [left + right + n * narrowest + (n - 1) * space for n, space in shape])
     heights = heights or [row_height] * len(rows)
-    total = sum(heights) + 0.5  # inches; half an inch for the title
+    total = sum(heights) + 0.8  # inches; the run's name, then a legend and title above a panel
     fig = plt.figure(figsize=(width, total))
     # margins in inches, room for the outer labels (a right-hand axis' too), so that the
     # picture is saved as laid out, without a second drawing to fit it (bbox_inches="tight")
     grid = fig.add_gridspec(len(rows), 1, height_ratios=heights, hspace=0.6, left=left / width,
-                            right=1 - right / width, top=1 - 0.55 / total, bottom=0.5 / total)
+                            right=1 - right / width, top=1 - 0.85 / total, bottom=0.5 / total)
     for cell, row, (n, space) in zip(grid, rows, shape):
         axis = (width - left - right - (n - 1) * space) / n  # inches, each axis of the row
         sub = cell.subgridspec(1, n, wspace=space / axis)  # wspace: a share of an axis' width
