@@ -415,10 +415,10 @@ def beside_own(fn, own, calls):
 def fell_short_by_rounding(short, calls):
     """Stage (c)'s note where the run with your function fell short and the run beside the
     script's own agreed with it at every call."""
-    return tr(f"your run fell short ({short.splitlines()[0]}),\n  but at each of the "
-              f"{calls:,} calls of the same run your function gave the script's own values to "
-              f"float32's rounding\n  (relative {RTOL:g}), and that run learns: the shortfall "
-              f"is one seed's run drifting from a last-digit difference, not your function",
-              f"你的训练没有达标（{short.splitlines()[0]}），\n  但在同一次训练的全部 {calls:,} "
+    return tr(f"your run fell short ({short.splitlines()[0]}), but at each of the {calls:,} "
+              f"calls of the same run your function gave the script's own values to float32's "
+              f"rounding (relative {RTOL:g}), and that run learns: the shortfall is one seed's "
+              f"run drifting from a last-digit difference, not your function",
+              f"你的训练没有达标（{short.splitlines()[0]}），但在同一次训练的全部 {calls:,} "
               f"次调用里，你的函数都给出了脚本自己的值（在 float32 的舍入之内，相对 {RTOL:g}），"
-              f"\n  而那次训练学会了：没达标是单个种子的训练从最后一位的差别开始走偏了，不是你的函数的问题")
+              f"而那次训练学会了：没达标是单个种子的训练从最后一位的差别开始走偏了，不是你的函数的问题")

@@ -102,3 +102,24 @@ def test_a_passing_learning_stage_ends_in_one_line(monkeypatch):
     assert check.check("td_target", fn=getattr(ex.owner(), ex.function), say=lines.append)
     assert len(lines) == 3 and lines[-1].startswith("td_target: (c) learning: pass (")
     assert lines[-1].endswith(" s)") and "\n" not in lines[-1], lines
+
+
+@pytest.mark.quick
+def test_a_run_that_fell_short_by_rounding_passes_in_one_line(monkeypatch):
+    """Where the learner's run fell short but matched the script's own at every call, stage
+    (c) passes with a note, still on one line."""
+    monkeypatch.setattr(check, "real_loop", lambda ex, fn: None)
+    runs_of = iter([check.Failed("the last 2 evaluations are 85, 135, not all 1000\nmore"),
+                    None])
+
+    def learning_run(ex, fn):
+        outcome = next(runs_of)
+        if outcome is not None:
+            raise outcome
+        return {}
+    monkeypatch.setattr(check, "learning_run", learning_run)
+    ex = check.EXERCISES["td_target"]
+    lines = []
+    assert check.check("td_target", fn=getattr(ex.owner(), ex.function), say=lines.append)
+    assert lines[-1].startswith("td_target: (c) learning: pass (") and "fell short" in lines[-1]
+    assert "\n" not in lines[-1], lines[-1]
