@@ -282,18 +282,20 @@ def evaluation_returns():
     return 1, fill
 
 
-def legend_above(ax, handles=None, title=None, on=None):
+def legend_above(ax, handles=None, title=None, on=None, stack=False):
     """The legend of `ax` over it, in one row, covering no line, `title` above it; where the
-    row would be wider than the axis, inside the axis where it covers the least (matplotlib's
-    "best"). `on`: the axis to draw it on (the one drawn last, where a right-hand axis shares
-    ax)."""
+    row would be wider than the axis, one entry under another above it (`stack`, for a panel
+    with room above it) or inside the axis where it covers the least (matplotlib's "best").
+    `on`: the axis to draw it on (the one drawn last, where a right-hand axis shares ax)."""
     handles = handles or ax.get_legend_handles_labels()[0]
     points = sum(4 * len(h.get_label()) + 30 for h in handles)  # 7-point text
-    if 72 * ax.get_position().width * ax.figure.get_figwidth() > points:
+    wide = 72 * ax.get_position().width * ax.figure.get_figwidth() > points
+    if wide or stack:
+        ncol = max(len(handles), 1) if wide else 1
         (on or ax).legend(handles=handles, fontsize=7, loc="lower left", bbox_to_anchor=(0, 1),
-                          ncol=max(len(handles), 1), frameon=False, borderaxespad=0.2)
+                          ncol=ncol, frameon=False, borderaxespad=0.2)
         if title:
-            ax.set_title(title, fontsize=9, pad=16)
+            ax.set_title(title, fontsize=9, pad=6 + 10 * -(-len(handles) // ncol))
         return
     (on or ax).legend(handles=handles, fontsize=7, loc="best")
     if title:
@@ -326,7 +328,7 @@ def axis_label(columns, labels, given):
 
 def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_log=True,
           log=False, ylim=None, between=None, hlines=(), steps=False, dashed=(), within=None,
-          where=None, x="global_step", x_of=None, xlabel="env steps", legend="above",
+          where=None, x="global_step", x_of=None, xlabel="env steps", legend="auto",
           coloured_by=None):
     """Panel: `columns` of the run's table over env steps, labelled as declared; `ylabel`:
     what they measure (one column: its declared label unless given; several: name the one
@@ -343,7 +345,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
     `xlabel`: what x is; `log`: a log y axis, or "wide": one where the values drawn span a
     factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`:
-    "above" the axis (legend_above), or where it goes in the axis; `coloured_by`: (column,
+    over the axis where it fits, else in it ("auto"), "above" it always (legend_above), or
+    where it goes in the axis (matplotlib's loc); `coloured_by`: (column,
     label): each row a point, not joined, coloured by that column (a colour bar, `label`, says
     how), a marker per column (the legend's, in grey, says which)."""
     def fill(axes, logs):
@@ -419,8 +422,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
             bar.set_label(coloured_by[1], fontsize=7)
             bar.ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # steps: whole numbers
         handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
-        if handles and legend == "above":
-            legend_above(ax, handles, title, top)
+        if handles and legend in ("auto", "above"):
+            legend_above(ax, handles, title, top, stack=legend == "above")
         elif handles:  # on the axis drawn last, above every line
             shown = top.legend(handles=handles, fontsize=7, loc=legend)
             if coloured:  # the marker says which column; the colour is the colour bar's
