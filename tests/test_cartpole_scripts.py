@@ -63,7 +63,9 @@ def assert_curve_drawn(path):
     assert image.ndim == 3 and image.shape[0] > 200 and image.shape[1] > 300
     rgb = image[..., :3].astype(int)
     colored = (rgb.max(-1) - rgb.min(-1)) > 60  # not white, grey or black: a plotted line
-    assert colored.mean() > 0.003, colored.mean()
+    # a line's share of the pixels falls as the dpi rises (96: DDPG's one-panel inside.png of
+    # a 600-step run, 0.0028); a plot with its lines left out keeps its legend's, about 0.0002
+    assert colored.mean() > 0.0015, colored.mean()
 
 
 def test_the_last_progress_row_is_where_training_ended(script, tmp_path):
