@@ -458,8 +458,7 @@ def named_mistake(ex, args, got, fn=None, expected=None):
         if expected is not None and same_outputs(expected, value):
             continue
         if same_outputs(got, value) and (fn is None or in_every_case(ex, fn, label)):
-            return tr("\n  this is exactly what this mistake gives: ",
-                      "\n  你的值恰好是这个常见错误会得到的值：\n    ") + label
+            return named(label)
     return ""
 
 
@@ -507,20 +506,20 @@ def check_cases(ex, fn):
         try:
             got = fn(*args)
         except RuntimeError as e:
-            named = ex.named_error(e) if ex.named_error else ""
-            if named:
+            cause = ex.named_error(e) if ex.named_error else ""
+            if cause:
                 raise Failed(tr("case: ", "例子：") + f"{what}\n  " + tr("input: ", "输入：")
-                             + f"{show(ex, args)}\n  " + raised(e, fn) + named) from None
+                             + f"{show(ex, args)}\n  " + raised(e, fn) + cause) from None
             raise
         for a, b in zip(args, saved):
             if torch.is_tensor(a) and not torch.equal(a, b):
                 raise Failed(tr(f"{what}: your function changed one of its inputs in place",
-                                f"{what}：你的函数原地改了它的一个输入") + tr(
-                    "\n  this is exactly what this mistake does: a result written into an input "
-                    "(x[t] = ..., +=, .add_()):\n    the caller's tensor is changed too; write "
-                    "into a new one (torch.zeros_like(x), x.clone())",
-                    "\n  这正是这个常见错误的表现：\n    把结果写进了输入（x[t] = ...、+=、.add_()）："
-                    "调用者手里的张量也被改了；要写进新的张量（torch.zeros_like(x)、x.clone()）"))
+                                f"{what}：你的函数原地改了它的一个输入") + named(tr(
+                    "a result written into an input (x[t] = ..., +=, .add_()):\n    the "
+                    "caller's tensor is changed too; write into a new one (torch.zeros_like(x), "
+                    "x.clone())",
+                    "把结果写进了输入（x[t] = ...、+=、.add_()）：调用者手里的张量也被改了；要写进新的"
+                    "张量（torch.zeros_like(x)、x.clone()）"), "does"))
         try:
             if isinstance(expected, tuple):
                 if not isinstance(got, tuple) or len(got) < len(expected):
