@@ -38,6 +38,7 @@ def cases():
 
 def mistakes(beta, d, cfg):
     lo, hi = cfg.d_targ / cfg.kl_tolerance, cfg.d_targ * cfg.kl_tolerance
+    right = adapted(beta, d, cfg.d_targ, cfg.kl_tolerance, cfg.beta_factor)
     outside = d < lo or d > hi
     return [(tr("the two rules swapped: beta must shrink when d is small, grow when it is large",
                 "两条规则反了：d 小时 β 应该变小，d 大时变大"),
@@ -59,21 +60,17 @@ def mistakes(beta, d, cfg):
             (tr("beta never lowered: the rule for d below the band (beta / cfg.beta_factor) "
                 "left out", "β 从来不减小：漏了 d 低于区间时的规则（beta / cfg.beta_factor）"),
              only_if(d < lo, beta))] + [
-            (tr("cfg.kl_tolerance and cfg.beta_factor swapped: the band d_targ / factor to "
-                "d_targ * factor, and beta multiplied or divided by the tolerance",
-                "cfg.kl_tolerance 和 cfg.beta_factor 弄反了：区间成了 d_targ / 倍数 到 "
-                "d_targ * 倍数，β 乘以或除以的是容差"), only_if(swapped != right, swapped))
-            for right, swapped in [(adapted(beta, d, cfg.d_targ, cfg.kl_tolerance,
-                                            cfg.beta_factor),
-                                    adapted(beta, d, cfg.d_targ, cfg.beta_factor,
-                                            cfg.kl_tolerance))]] + [
-            (tr("no band: d compared with d_targ itself, where beta stays put between "
-                "d_targ / cfg.kl_tolerance and d_targ * cfg.kl_tolerance",
-                "没有容差区间：d 直接和 d_targ 比较；d 在 d_targ / cfg.kl_tolerance 到 "
-                "d_targ * cfg.kl_tolerance 之间时 β 应该不变"), only_if(no_band != right, no_band))
-            for right, no_band in [(adapted(beta, d, cfg.d_targ, cfg.kl_tolerance,
-                                            cfg.beta_factor),
-                                    adapted(beta, d, cfg.d_targ, 1.0, cfg.beta_factor))]]
+            (label, only_if(value != right, value)) for label, value in (
+                (tr("cfg.kl_tolerance and cfg.beta_factor swapped: the band d_targ / factor to "
+                    "d_targ * factor, and beta multiplied or divided by the tolerance",
+                    "cfg.kl_tolerance 和 cfg.beta_factor 弄反了：区间成了 d_targ / 倍数 到 "
+                    "d_targ * 倍数，β 乘以或除以的是容差"),
+                 adapted(beta, d, cfg.d_targ, cfg.beta_factor, cfg.kl_tolerance)),
+                (tr("no band: d compared with d_targ itself, where beta stays put between "
+                    "d_targ / cfg.kl_tolerance and d_targ * cfg.kl_tolerance",
+                    "没有容差区间：d 直接和 d_targ 比较；d 在 d_targ / cfg.kl_tolerance 到 "
+                    "d_targ * cfg.kl_tolerance 之间时 β 应该不变"),
+                 adapted(beta, d, cfg.d_targ, 1.0, cfg.beta_factor)))]
 
 
 def adapted(beta, d, d_targ, tolerance, factor):
