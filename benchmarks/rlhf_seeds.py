@@ -237,8 +237,9 @@ def plot(chinese=False):
 
 def main():
     if "--plot" in sys.argv:
-        return plot(chinese="--lang" in sys.argv and sys.argv[sys.argv.index("--lang") + 1:][:1]
-                    == ["zh"])
+        sys.path.insert(0, str(ROOT))
+        import help_zh
+        return plot(chinese=help_zh.wanted(sys.argv[1:])[2])  # --lang zh, as the scripts read it
     if "--table" in sys.argv:
         cells, seeds = summary()
         print(f"seeds {seeds}\n" + "\n".join(" | ".join(c) for c in cells))

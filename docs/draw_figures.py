@@ -72,8 +72,8 @@ def draw_q_against_return(path, upto=200_000):
 
 
 if __name__ == "__main__":
-    zh = sys.argv[1:] == ["--lang", "zh"]  # the words from locale/output.zh-CN.md
-    if zh:
+    zh = help_zh.wanted(sys.argv[1:])[2]  # --lang zh (or a Chinese locale), as the scripts
+    if zh:  # the words from locale/output.zh-CN.md
         help_zh.print_in_chinese()
     suffix = ".zh-CN.png" if zh else ".png"
     print(draw_clip_objective(ROOT / "docs" / f"ppo_clip_objective{suffix}"))
