@@ -17,8 +17,7 @@ finish_path(last_val) -> common.gae, buf.get -> batch_of. The loop in train():
     python ppo_reacher.py --eval runs/latest --watch      # the trained arm in a window
 
 Unlike 002 (docs/why.md): normalised observations (--norm-obs), orthogonal init, the sample
-clipped to the box at the env (002 passes it, and Reacher charges its control cost on it), and
-V bootstrapped at a time limit (gymnasium's `truncated`).
+clipped to the box at the env (Reacher's control cost is on it), V bootstrapped at a time limit.
 
 中文导读：连续动作的 PPO-clip，任务是 MuJoCo 的 Reacher-v5：两节机械臂把指尖伸向目标点，和教程 002
 所在专栏（“实现机械臂reach某点之PPO算法实现”）是同类任务。策略是高斯分布 N(mu(s), sigma^2)，
@@ -48,19 +47,15 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
-def layer_init(layer, gain=np.sqrt(2)):
-    """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
-    nn.init.orthogonal_(layer.weight, gain)
-    nn.init.zeros_(layer.bias)
-    return layer
-
-
 def mlp(sizes, last_gain):
-    """Linear layers with tanh between them (Spinning Up's and the PPO paper's networks)."""
+    """Linear layers with tanh between them (Spinning Up's and the PPO paper's networks), each
+    with orthogonal weights and zero bias: the init of the PPO reference code (baselines)."""
     layers = []
-    for n_in, n_out in zip(sizes[:-2], sizes[1:-1]):
-        layers += [layer_init(nn.Linear(n_in, n_out)), nn.Tanh()]
-    return nn.Sequential(*layers, layer_init(nn.Linear(*sizes[-2:]), last_gain))
+    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+        layers += [nn.Linear(n_in, n_out), nn.Tanh()]
+        nn.init.orthogonal_(layers[-2].weight, last_gain if i == len(sizes) - 2 else np.sqrt(2))
+        nn.init.zeros_(layers[-2].bias)
+    return nn.Sequential(*layers[:-1])  # no tanh after the last layer
 
 
 def gaussian_log_prob(mu, log_std, act):
@@ -179,17 +174,16 @@ class Config(cli.CheckpointFlags):
     def __post_init__(self):
         super().__post_init__()  # the shared flags' checks
         mujoco_env.check_mujoco(self.env_id)
-        cli.check_ranges(
-            self, total_timesteps="> 0", eval_every="> 0", num_envs="> 0", num_steps="> 0",
-            hidden="> 0", pi_lr="> 0", vf_lr="> 0", train_pi_iters="> 0", train_v_iters="> 0",
-            update_epochs="> 0", num_minibatches="> 0", gamma="(0, 1]", lam="[0, 1]",
-            clip_ratio="> 0", kl_stop_factor="> 0", target_kl="> 0 or none",
-            max_grad_norm=">= 0")
+        cli.check_ranges(self, total_timesteps="> 0", eval_every="> 0", num_envs="> 0",
+                         num_steps="> 0", hidden="> 0", pi_lr="> 0", vf_lr="> 0", gamma="(0, 1]",
+                         train_pi_iters="> 0", train_v_iters="> 0", update_epochs="> 0",
+                         num_minibatches="> 0", lam="[0, 1]", clip_ratio="> 0",
+                         kl_stop_factor="> 0", target_kl="> 0 or none", max_grad_norm=">= 0")
         cli.check(self.update in ("full_batch", "minibatch"),
                   f"--update is full_batch or minibatch, got {self.update}")
         batch = self.num_envs * self.num_steps
-        cli.check(self.num_minibatches <= batch, f"--num-minibatches "
-                  f"({self.num_minibatches}) exceeds the batch size ({batch})")
+        cli.check(self.num_minibatches <= batch,
+                  f"--num-minibatches ({self.num_minibatches}) exceeds the batch size ({batch})")
         cli.check(self.resume or self.total_timesteps >= batch, f"--total-timesteps "
                   f"({self.total_timesteps}) is less than one rollout ({batch} steps)")
         cli.check(self.print_every % self.num_envs == 0,
@@ -260,6 +254,7 @@ def update(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
     pi_l_old, pi_info_old = compute_loss_pi(policy, data, cfg.clip_ratio)
     pi_l_old, v_l_old = pi_l_old.item(), compute_loss_v(value_net, data).item()
     stop_iter = cfg.train_pi_iters  # no early stop: every step taken
+    # Train policy with multiple steps of gradient descent (002), each on the whole batch
     for i in range(cfg.train_pi_iters):
         loss_pi, pi_info = compute_loss_pi(policy, data, cfg.clip_ratio)
         if cfg.target_kl is not None and pi_info["kl"] > cfg.kl_stop_factor * cfg.target_kl:
@@ -272,10 +267,10 @@ def update(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
 
 
 def update_minibatch(policy, value_net, pi_optimizer, vf_optimizer, data, cfg):
-    """--update minibatch: update_epochs passes of num_minibatches shuffled minibatches, a
-    policy step and a value step on each: ppo_cartpole.py's (and CleanRL's) loop, with this
-    script's losses, two optimizers and early stop (checked on the whole batch before each
-    policy step; then the value steps go on). Advantages are normalised over the batch."""
+    """--update minibatch: update_epochs passes of num_minibatches shuffled minibatches, a policy
+    step and a value step on each: ppo_cartpole.py's (CleanRL's) loop with this script's losses,
+    two optimizers and early stop (checked on the whole batch before each policy step; the value
+    steps go on after it). The advantages were normalised over the whole batch (batch_of)."""
     pi_l_old, pi_info_old = compute_loss_pi(policy, data, cfg.clip_ratio)
     pi_l_old, v_l_old = pi_l_old.item(), compute_loss_v(value_net, data).item()
     steps, stopped = 0, False
@@ -300,9 +295,8 @@ def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
     saw them, log pi_old(a|s), advantages (GAE, normalized over the batch as 002's buf.get does)
     and value targets; and the raw obs the rollout met (for the next one's statistics)."""
     raw = rollout["obs"][rollout["valid"]]
-    # The statistics have not moved since the rollout began: normalising now gives the very
-    # inputs pi_old acted on, so log pi_old and V can be computed here, in one batch (002's
-    # ac.step stores them while it collects)
+    # The statistics have not moved since the rollout began: normalising now gives the inputs
+    # pi_old acted on, so log pi_old and V are computed here (002's ac.step stores them)
     rollout["obs"] = obs_norm(rollout["obs"])
     if cfg.norm_reward:  # r / the running std of the discounted return, this rollout's in
         return_norm.update(rollout["discounted"][rollout["valid"]])
@@ -326,8 +320,9 @@ def batch_of(rollout, obs, policy, value_net, obs_norm, return_norm, cfg):
 
 
 def after_update(policy, data, cfg, loss_pi, loss_v, entropy, pi_steps):
-    """evaluations.csv's numbers of an update: its losses before it, how far pi moved on the
-    whole batch after it (approx_kl, clipfrac, where r went), sigma, the policy steps taken."""
+    """evaluations.csv's own columns (LOGGED) from the last update: its losses before it, how
+    far pi moved on the whole batch after it (approx_kl, clipfrac, where r went), sigma, the
+    policy steps taken."""
     with torch.no_grad():
         info = compute_loss_pi(policy, data, cfg.clip_ratio)[1]
     std = policy.log_std.detach().exp()
@@ -349,7 +344,6 @@ def evaluate(run, actor, device, info, step, last):
                             mujoco_env.gif_for(cfg.env_id))
 
 
-# evaluations.csv's own columns (the last update's numbers at each evaluation), once
 LOGGED = dict(loss_pi=(None, "-L_CLIP before the update"), loss_v=(None, "L_VF before it"),
               approx_kl=(None, "approx_kl: E[log pi_old - log pi] after it"),
               clipfrac=(None, "clipfrac: |r - 1| > eps, after it"),
@@ -390,12 +384,10 @@ def train(cfg: Config):
     torch.manual_seed(cfg.seed)  # the networks' init and the sampled actions
     device = torch.device("cuda" if cfg.cuda and torch.cuda.is_available() else "cpu")
     envs, obs, _ = common.make_vec_env(cfg.env_id, cfg.num_envs, cfg.seed, continuous=True)
-    obs_dim = int(envs.single_observation_space.shape[0])
-    act_dim = int(envs.single_action_space.shape[0])
+    obs_dim, act_dim = envs.single_observation_space.shape[0], envs.single_action_space.shape[0]
     low, high = envs.single_action_space.low, envs.single_action_space.high
     T, N = cfg.num_steps, cfg.num_envs
     buffer = RolloutBuffer(T, N, obs_dim, act_dim)
-
     policy = PolicyNetwork(obs_dim, act_dim, cfg.hidden, cfg.log_std_init).to(device)
     value_net = ValueNetwork(obs_dim, cfg.hidden).to(device)
     obs_norm = common.RunningNorm(obs_dim, cfg.norm_obs).to(device)
