@@ -472,7 +472,7 @@ def pictures(cfg, sft_steps, samples):
     right = "share of the answers right"
     cross_entropy = "cross-entropy (nats per answer token)"
     moved = plots.lines("kl", right=("flat_groups",), right_log=False, title=f"{second}: how "
-                        "far from pi_ref, and the groups without signal", **then)
+                        "far from pi_ref, and the groups without signal", legend="above", **then)
     return dict(curve=[[plots.lines("pass1", title="supervised", ylabel=right, **first),
                         plots.lines("pass1", "reward", title=second, ylabel=right, **then)],
                        [plots.lines("loss", title="supervised", ylabel=cross_entropy, **first),
