@@ -362,7 +362,7 @@ def pictures(cfg):
         [plots.lines("std_min", "std_max", title="exploration: sigma of pi", ylabel="sigma"),
          plots.lines("distance", title="reaching (Reacher)", ylabel="fingertip to target, end"),
          plots.lines("pi_steps", title="policy steps on the last batch", ylabel="policy steps",
-                     ylim=(0, 1.05 * max(cfg.train_pi_iters, 10)))],
+                     ylim=(0, 1.05 * max(cfg.train_pi_iters, 10)), legend="above")],
         [plots.spread("ratio", "r after the last update; dashed: 1 +- eps", band,
                       ylabel="r = pi / pi_old"),
          plots.lines("approx_kl", title="after the last update; dashed: target_kl, 1.5 x it",
