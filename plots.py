@@ -89,7 +89,8 @@ def figure(rows, logs, title, width=12, row_height=3.3, heights=None, gap=1.0):
     """The figure of `rows` of panels, filled from `logs`, `title` on top: `width` inches
     wide, or wider where a row's axes would be narrower than 1.8 inches. `gap`: inches
     between two axes of a row, room for the tick labels and y label of the one on the right;
-    0.7 more in a row with a right-hand axis (a panel whose fill has right_axis true)."""
+    0.7 more in a row with a right-hand axis (a panel whose fill has right_axis true). A row is
+    `row_height` high, or its tallest panel's `height` where its fills give one (a flat map)."""
     plt = pyplot()
     left, right, narrowest = 1.0, 1.0, 1.8  # inches: the margins, the narrowest axis
     # per row: its axes, and the inches between two of them
@@ -97,7 +98,8 @@ def figure(rows, logs, title, width=12, row_height=3.3, heights=None, gap=1.0):
               gap + 0.7 * any(getattr(fill, "right_axis", False) for _, fill in row))
              for row in rows]
     width = max([width] + [left + right + n * narrowest + (n - 1) * space for n, space in shape])
-    heights = heights or [row_height] * len(rows)
+    heights = heights or [max(getattr(fill, "height", row_height) for _, fill in row)
+                          for row in rows]
     total = sum(heights) + 0.8  # inches; the run's name, then a legend and title above a panel
     fig = plt.figure(figsize=(width, total))
     # margins in inches, room for the outer labels (a right-hand axis' too), so that the

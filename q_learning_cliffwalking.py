@@ -231,6 +231,7 @@ def grid(maps, blank):
             ax.set(title=title, xticks=[], yticks=[], facecolor="0.8")
             ax.set_ylabel("4 rows", fontsize=8)  # the bottom one: start, cliff, goal
         axes[-1].figure.colorbar(shown, ax=axes, fraction=0.02, label="V(s) = max_a Q(s, a)")
+    fill.height = 1.8  # inches: the row of flat maps, less empty room above and below them
     return len(maps), fill
 
 
