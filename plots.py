@@ -576,6 +576,7 @@ def text(lines, title, largest=12):
         size = min(largest, wide / (0.6 * chars), high / (1.2 * max(len(lines), 1)))
         ax.text(0, 1, "\n".join(lines), va="top", family="monospace", fontsize=size,
                 transform=ax.transAxes)
+    fill.height = min(3.3, 0.8 + 0.2 * len(lines))  # inches: a few lines leave no empty row
     return 1, fill
 
 
