@@ -314,7 +314,10 @@ def warm_up_shaded(ax, steps, warm_up):
 
 def series(ax, x, y, warm, **style):
     """y over x, drawn in `style`; the points where `warm` (the random warm-up's) as open
-    circles, not joined to the line of the learned ones: a line from them reads as learning."""
+    circles, not joined to the line of the learned ones: a line from them reads as learning.
+    A line of one point draws nothing: a lone learned point is a dot."""
+    if (~warm).sum() == 1 and not style.get("marker"):
+        style = dict(style, marker="o", ms=4)
     ax.plot(x[~warm], y[~warm], **style)
     if warm.any():
         ax.plot(x[warm], y[warm], "o", ms=5, mfc="none", color=style["color"])

@@ -523,6 +523,22 @@ def test_no_line_joins_the_random_warm_up_to_the_learned_evaluations(panel):
 
 
 @pytest.mark.quick
+@pytest.mark.parametrize("panel", ["evaluation_returns", "lines"])
+def test_a_lone_learned_evaluation_is_a_dot(panel):
+    """The first evaluation after a random warm-up, alone: a line of one point draws nothing,
+    so it is drawn as a dot (a walker's picture after its first learned evaluation)."""
+    import plots
+
+    builder = plots.evaluation_returns() if panel == "evaluation_returns" else plots.lines(
+        "q_estimate")
+    logs = warm_up_logs()
+    logs["table"] = logs["evaluations"] = {k: v[:3] for k, v in logs["table"].items()}
+    (ax,) = drawn(builder, logs)
+    learned = [line for line in ax.lines if list(line.get_xdata()) == [300]]
+    assert learned and all(line.get_marker() not in ("None", "", None) for line in learned)
+
+
+@pytest.mark.quick
 def test_dashed_columns_lie_over_the_others_and_both_show_where_they_coincide():
     """DQN's two targets, equal where the online argmax and the target's agree: the dashed
     one drawn over the other, which is wider, so that its colour shows in the dashes' gaps."""
