@@ -207,8 +207,8 @@ SMOKE = dict(total_timesteps=2048, stop_when_solved=False, eval_episodes=2)  # t
 def pictures(cfg):
     """curve.png: pi's entropy; inside.png (docs/inside.md): explained variance, V(s_t) vs R_t."""
     return dict(curve=[[plots.lines("entropy")]], inside=[[
-        plots.lines("explained_var", ylim=(-1, 1.05), title="1 - Var(R - V) / Var(R)",
-                    ylabel="explained variance of R by V"),
+        plots.lines("explained_var", ylim=(-1, 1.05), ylabel="explained variance of R by V",
+                    title="explained variance: 1 - Var(R - V) / Var(R)"),
         plots.scatters("ret", "values", "target R_t", "V(s_t)")]])
 
 

@@ -424,7 +424,7 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
         if coloured:  # one scale for every column's points; room for a right-hand axis' labels
             bar = ax.figure.colorbar(coloured[0], ax=list(dict.fromkeys((ax, top))),
                                      fraction=0.04, pad=0.12 if right else 0.03)
-            bar.set_label(coloured_by[1], fontsize=7)
+            bar.ax.set_title(coloured_by[1], fontsize=7)  # above the bar: upright in any script
             bar.ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # steps: whole numbers
         handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
         if handles and legend in ("auto", "above"):
@@ -549,14 +549,16 @@ def histograms(array, by_sign_of=None, band=None, ylabel="samples in the batch")
     return 3, fill
 
 
-def distributions(arrays, title, xlabel, ylabel="count"):
+def distributions(arrays, title, xlabel, ylabel="count", vline=None):
     """Panel: histograms of `arrays` ({label: numbers}), over the same bins, one on another;
-    `ylabel`: what one count is."""
+    `ylabel`: what one count is; `vline`: an x marked by a dashed line (e.g. 0)."""
     def fill(axes, logs):
         ax, values = axes[0], [np.asarray(a, dtype=float) for a in arrays.values()]
         bins = np.histogram_bin_edges(np.concatenate(values), bins=40)
         for i, (label, a) in enumerate(zip(arrays, values)):
             ax.hist(a, bins=bins, color=f"C{i}", alpha=0.6, label=label)
+        if vline is not None:
+            ax.axvline(vline, color="k", ls="--", lw=1)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel, fontsize=8)

@@ -441,7 +441,7 @@ def pictures(margins):
          plots.lines("kl", where=("phase", "ppo"), title="ppo: how far from the supervised model",
                      **stage)]], inside=[[
         plots.distributions({"r(x, y_w) - r(x, y_l)": margins.numpy()}, "reward model on "
-                            "held-out pairs: right of 0, ranked right", "margin"),
+                            "held-out pairs: right of 0 (dashed), ranked right", "margin", vline=0),
         plots.lines("true_score", right=("rm_score",), right_log=False, where=("phase", "ppo"),
                     x="kl", coloured_by=("global_step", "step"),
                     x_of=lambda kl: np.sqrt(np.maximum(kl, 0)),
