@@ -396,7 +396,7 @@ def train(cfg: Config):
     untrained = copy.deepcopy(actor)  # before.gif
     pi_optimizer = torch.optim.Adam(policy.parameters(), lr=cfg.pi_lr)
     vf_optimizer = torch.optim.Adam(value_net.parameters(), lr=cfg.vf_lr)
-    run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, 0, cfg.eval_every)
+    run = runlog.EvaluationLog(SCRIPT, cfg, device, LOGGED, 0, cfg.eval_every, step_size=T * N)
     actor_info = dict(obs_dim=obs_dim, act_dim=act_dim, low=low.tolist(), high=high.tolist())
     autoreset = np.zeros(N, dtype=bool)  # which envs are at a NEXT_STEP autoreset step
     discounted = np.zeros(N)  # each env's discounted return so far (--norm-reward)

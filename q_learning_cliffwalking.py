@@ -310,7 +310,8 @@ def train(cfg: Config):
                           ("after_sarsa.gif", greedy(tables["sarsa"]))):
             G = common.record_gif(ENV_ID, act, run.dir / name, cfg.eval_seed, fps=4, scale=2,
                                   max_frames=60, max_episode_steps=cfg.max_episode_steps)
-            print(f"{name}: return {G:.0f} -> {run.dir / name}", flush=True)
+            walk = " (a random walk: -100 at each fall off the cliff)" * (name == "before.gif")
+            print(f"{name}: return {G:.0f}{walk} -> {run.dir / name}", flush=True)
     return result
 
 

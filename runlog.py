@@ -260,7 +260,8 @@ class EvaluationLog:
     load_state_dict() rewinds the logs and those files to it.
     `shipped`: a trained model of the script to point to while this one trains, if any."""
 
-    def __init__(self, script, cfg, device, logged, learning_starts, eval_every, shipped=None):
+    def __init__(self, script, cfg, device, logged, learning_starts, eval_every, shipped=None,
+                 step_size=1):
         self.script, self.cfg, self.logged = script, cfg, logged
         self.learning_starts = learning_starts
         labels, self.tags = labels_and_tags(logged)
@@ -278,8 +279,14 @@ class EvaluationLog:
         first = max(eval_every * (learning_starts // eval_every + 1), eval_every)
         warm_up = (f"once in the warm-up (step {eval_every}), then "
                    if eval_every <= learning_starts else "")
-        print(f"curve.png there is redrawn at every evaluation: {warm_up}from step {first} "
-              f"on, every {eval_every} steps", flush=True)
+        if step_size > 1:  # the steps come step_size at a time (a rollout), then an update
+            first = -(-first // step_size) * step_size
+            print(f"curve.png there is redrawn at every evaluation: after the update that "
+                  f"reaches each multiple of {eval_every} steps (the first at step {first})",
+                  flush=True)
+        else:
+            print(f"curve.png there is redrawn at every evaluation: {warm_up}from step {first} "
+                  f"on, every {eval_every} steps", flush=True)
         if shipped is not None and Path(shipped).exists():
             print(f"meanwhile, a trained one: python {script}.py --eval {shipped} --gif "
                   f"{script}.gif (or --watch)", flush=True)

@@ -55,7 +55,7 @@ def draw_q_against_return(path, upto=200_000):
     runs = {"DDPG (ddpg_walker.py)": results / "ddpg_walker_200k_inside" / "evaluations.csv",
             "TD3 (td3_walker.py)": results / "td3_walker_1m" / "seed0" / "evaluations.csv"}
     plt = plots.pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     for ax, (name, csv_path) in zip(axes, runs.items()):
         table = plots.read_csv(csv_path)
         keep = table["global_step"] <= upto
@@ -68,7 +68,7 @@ def draw_q_against_return(path, upto=200_000):
         ax.set_title(f"{name}, Walker2d-v5, seed 0, the first {upto:,} steps", fontsize=9)
     axes[0].set_ylabel("mean over the states of\nthe evaluation episodes", fontsize=8)
     fig.tight_layout()
-    return plots.save_whole(plt, fig, path, dpi=80)
+    return plots.save_whole(plt, fig, path, dpi=110)  # 7-point Chinese legible
 
 
 if __name__ == "__main__":
