@@ -12,6 +12,7 @@ benchmarks/results/<script>_1m/seed<k>/ as it grows.
     python benchmarks/ddpg_walker_1m.py plot --script td3_walker   # TD3's runs beside DDPG's
     python benchmarks/ddpg_walker_1m.py at 300000          # DDPG, TD3 and SAC at equal steps
     python benchmarks/ddpg_walker_1m.py plot --script sac_walker   # the three, to SAC's last step
+    python benchmarks/ddpg_walker_1m.py plot --lang zh     # the Chinese twin, *_1m.zh-CN.png
     python benchmarks/ddpg_walker_1m.py start ~/ppo-1m --script ppo_reacher   # PPO, 3 seeds
     python benchmarks/ddpg_walker_1m.py plot --script ppo_reacher  # PPO beside the three
     python benchmarks/ddpg_walker_1m.py at 500000 --script ppo_reacher   # the four at 500k
@@ -36,6 +37,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import settings  # noqa: E402  each record's flags, written out
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+import help_zh  # noqa: E402  --lang, read as the scripts read it
+
 SCRIPT = "ddpg_walker"  # or td3_walker (--script)
 SEEDS, BUDGET = (0, 1, 2, 3, 4), 1_000_000
 ALL = SEEDS
@@ -236,17 +240,16 @@ def mean_se(values):
     return "-" if len(values) < 2 else "{:.0f} ({:.0f})".format(*mean_and_se(values))
 
 
-def plot():
-    """docs/<script>_1m.png from the committed records, drawn as plots.py draws run folders:
+def plot(suffix=".png"):
+    """docs/<script>_1m<suffix> from the committed records, drawn as plots.py draws run folders:
     each seed a thin line, the mean where every seed has a value thick; TD3's beside DDPG's."""
     sys.path.insert(0, str(ROOT))
     import plots
     scripts = {"ddpg_walker": ["ddpg_walker"], "td3_walker": ["ddpg_walker", "td3_walker"],
                "sac_walker": ["ddpg_walker", "td3_walker", "sac_walker"],
                "ppo_reacher": list(NAMES)}[SCRIPT]
-    # SAC's picture ends where SAC's furthest run is: the three at equal steps
-    upto = (max(read(record(s, SCRIPT))[-1][0] for s in SEEDS if record(s, SCRIPT).exists())
-            if SCRIPT == "sac_walker" else BUDGET)
+    # SAC's picture: the three at equal steps, to 300,000 (docs/results.md's SAC section)
+    upto = 300_000 if SCRIPT == "sac_walker" else BUDGET
     with tempfile.TemporaryDirectory() as tmp:
         runs = []
         for script in scripts:
@@ -259,7 +262,7 @@ def plot():
                     (run / "evaluations.csv").write_text(head + "".join(
                         row for row in rows if int(row.split(",")[0]) <= upto))
                     runs.append(run)
-        print(f"wrote {plots.compare(runs, ROOT / 'docs' / f'{SCRIPT}_1m.png')}")
+        print(f"wrote {plots.compare(runs, ROOT / 'docs' / f'{SCRIPT}_1m{suffix}')}")
 
 
 def main():
@@ -270,14 +273,18 @@ def main():
     parser.add_argument("--script", default=SCRIPT, choices=tuple(NAMES))
     parser.add_argument("--seeds", type=int, nargs="+", default=None,
                         help="start: only these seeds (the others wait for a later start)")
-    args = parser.parse_args()
+    argv, _, zh = help_zh.wanted(sys.argv[1:])  # --lang zh (or a Chinese locale): plot's words
+    args = parser.parse_args(argv)
+    if zh and args.action == "plot":  # from locale/output.zh-CN.md, as the scripts' pictures
+        help_zh.print_in_chinese()
     SCRIPT = args.script
     SEEDS = SEEDS_OF.get(SCRIPT, ALL)  # the script's seeds: status and table
     if args.action in ("start", "status", "at") and args.parent is None:
         parser.error(f"{args.action} needs the folder of the runs, e.g. ~/ddpg-1m"
                      if args.action != "at" else "at needs a step, e.g. at 300000")
     {"start": lambda: start(Path(args.parent), args.seeds or SEEDS),
-     "status": lambda: status(Path(args.parent)), "table": table, "plot": plot,
+     "status": lambda: status(Path(args.parent)), "table": table,
+     "plot": lambda: plot(".zh-CN.png" if zh else ".png"),
      "at": lambda: at_equal_steps(int(args.parent), *(  # --script ppo_reacher: PPO too
          [list(NAMES)] if SCRIPT == "ppo_reacher" else []))}[args.action]()
 
