@@ -466,8 +466,9 @@ def pictures(cfg, sft_steps, samples):
     ratios = [] if baseline else [[plots.histograms("ratio", band=(1 - cfg.clip_coef,
                                                                    1 + cfg.clip_coef),
                                                     ylabel="answer tokens")]]
+    widest = max(len(line) for lines in samples.values() for line in lines)  # one type size
     answers = [[plots.text(lines, f"{when} {second}: {len(lines)} held-out sums, "
-                           f"{cfg.group_size} sampled answers each (x: wrong)")
+                           f"{cfg.group_size} sampled answers each (x: wrong)", columns=widest)
                 for when, lines in samples.items()]]
     right = "share of the answers right"
     cross_entropy = "cross-entropy (nats per answer token)"

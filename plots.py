@@ -566,9 +566,10 @@ def distributions(arrays, title, xlabel, ylabel="count", vline=None):
     return 1, fill
 
 
-def text(lines, title, largest=12):
+def text(lines, title, largest=12, columns=None):
     """Panel: `lines` of text (e.g. sampled answers), top-down in a fixed-width font, no axes,
-    as large as the panel holds them (at most `largest` points)."""
+    as large as the panel holds them (at most `largest` points); `columns`: the characters a
+    line is sized for, the longest line's if not given (panels side by side: one size)."""
     def fill(axes, logs):
         ax = axes[0]
         ax.axis("off")
@@ -576,7 +577,7 @@ def text(lines, title, largest=12):
         box = ax.get_position()  # a share of the figure: its size in points
         wide, high = (72 * box.width * ax.figure.get_figwidth(),
                       72 * box.height * ax.figure.get_figheight())
-        chars = max((len(line) for line in lines), default=1)
+        chars = columns or max((len(line) for line in lines), default=1)
         # a monospace character is about 0.6 of the font size wide; a line 1.2 of it high
         size = min(largest, wide / (0.6 * chars), high / (1.2 * max(len(lines), 1)))
         ax.text(0, 1, "\n".join(lines), va="top", family="monospace", fontsize=size,

@@ -567,3 +567,9 @@ def test_text_is_as_large_as_its_panel_holds():
         assert text.get_fontsize() >= 9.5
         assert inside.x0 - 1 <= box.x0 and box.x1 <= inside.x1 + 1, (box, inside)
         assert inside.y0 - 1 <= box.y0 and box.y1 <= inside.y1 + 1, (box, inside)
+    # before with its x marks, after without: sized for the same columns, one type size
+    short = ["12+34= " + " ".join(["046."] * 8)] * 8
+    fig = plots.figure([[plots.text(lines, "before", columns=len(lines[0])),
+                         plots.text(short, "after", columns=len(lines[0]))]],
+                       dict(kept=[], labels={}), "answers")
+    assert len({round(ax.texts[0].get_fontsize(), 6) for ax in fig.axes}) == 1
