@@ -2,6 +2,7 @@
 at the settings of stage (c). Writes docs/exercises_bugs.png (about 3 minutes on a CPU).
 
     python exercises/draw_bugs.py
+    python exercises/draw_bugs.py --lang zh   # its Chinese twin, docs/exercises_bugs.zh-CN.png
 """
 
 import contextlib
@@ -13,9 +14,11 @@ from pathlib import Path
 
 import check  # noqa: F401  (first: it puts the scripts on the path)
 
+import help_zh
 import plots
 
-OUT = check.HERE.parent / "docs" / "exercises_bugs.png"
+ZH = help_zh.wanted(sys.argv[1:])[2]  # --lang zh (or a Chinese locale), as the scripts read it
+OUT = check.HERE.parent / "docs" / f"exercises_bugs{'.zh-CN' if ZH else ''}.png"
 
 
 def curve(ex, fn, tmp):
@@ -29,6 +32,8 @@ def curve(ex, fn, tmp):
 
 
 def main():
+    if ZH:  # the picture's words from locale/output.zh-CN.md
+        help_zh.print_in_chinese()
     plt = plots.pyplot()
     fig, axes = plt.subplots(1, len(check.BUGS), figsize=(13, 3.6))
     with tempfile.TemporaryDirectory() as tmp:
