@@ -226,7 +226,7 @@ def plot(chinese=False):
             ax.plot(kl, [float(r[key]) for r in mine], ".-", color=color, ms=3, lw=0.8,
                     label={"default": "beta 0.1 (default)", "beta 1": "beta 1",
                            "judge": "beta 0.1, reward = the judge's score"}[name])
-        ax.set(title=title, xlabel="sqrt(KL(pi || pi_sft)) per answer, nats^0.5")
+        ax.set(title=title, xlabel="sqrt(KL(pi || pi_ref)) per answer, nats^0.5")
         ax.legend(fontsize=7)
     fig.suptitle("PPO's sampled answers, seed 0, one dot per PPO step", fontsize=9)
     fig.tight_layout()
