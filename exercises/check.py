@@ -314,6 +314,8 @@ def ChineseHelp(prog):
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)  # --help in the messages' language too:
+    if "--help-zh" in argv:  # as the scripts' --help-zh: the help in Chinese
+        argv = [a for a in argv if a != "--help-zh"] + ["--help", "--lang", "zh"]
     given = [b for a, b in zip(argv, argv[1:]) if a == "--lang"] + [
         a.partition("=")[2] for a in argv if a.startswith("--lang=")]
     checking.LANG = given[-1] if given and given[-1] in ("zh", "en") else checking.locale_lang()

@@ -1158,6 +1158,9 @@ def test_no_learning_says_stage_c_was_not_run_and_help_follows_the_language(monk
     out = capsys.readouterr().out
     assert "只跑第 (a)、(b) 两关" in out and "检查练习，分三关" in out, out
     assert "显示本帮助并退出" in out and "LANG 等以 zh 开头就用" in out and "跟随" not in out, out
+    with pytest.raises(SystemExit):  # --help-zh, as the scripts take it
+        check.main(["--help-zh"])
+    assert capsys.readouterr().out == out
     monkeypatch.setattr(checking, "LANG", "zh")
     passed, lines = run("td_target", compile_answer(WRONG["td_target"][0][0], "td_target"))
     assert "常见错误会得到的值：\n    没有乘 not_done，" in lines[-1], lines[-1]
