@@ -466,7 +466,7 @@ def pictures(cfg, sft_steps, samples):
     ratios = [] if baseline else [[plots.histograms("ratio", band=(1 - cfg.clip_coef,
                                                                    1 + cfg.clip_coef),
                                                     ylabel="answer tokens")]]
-    widest = max(len(line) for lines in samples.values() for line in lines)  # one type size
+    widest = max((len(line) for lines in samples.values() for line in lines), default=1)
     answers = [[plots.text(lines, f"{when} {second}: {len(lines)} held-out sums, "
                            f"{cfg.group_size} sampled answers each (x: wrong)", columns=widest)
                 for when, lines in samples.items()]]
