@@ -71,7 +71,7 @@ def maps(cfg, nets, device, visited, reward_scale=None, labels=("V(s)", "pi(righ
             **{when: dict(value=m["value"], policy=m["right"]) for when, m in found.items()},
             true=dict(value=true["value"]), true_x=true["angle"], true_y=true["velocity"],
             x=found["trained"]["angle"], y=found["trained"]["velocity"],
-            xlabel="pole angle (rad)", ylabel="angular velocity", value_label=labels[0],
+            xlabel="pole angle (rad)", ylabel="angular velocity (rad/s)", value_label=labels[0],
             policy_label=labels[1],
             visited=np.concatenate(visited)[:, 2:4] if visited else np.zeros((0, 2)))
     return make

@@ -393,7 +393,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
                 on_top = column in dashed  # the others wide beneath it, to show at its gaps
                 style = dict(color=color, label=labels.get(column, column), ms=3,
                              marker="o" if sparse else None, ls="--" if on_top else "-",
-                             lw=1 if on_top or not dashed else 3, zorder=3 if on_top else 2,
+                             lw=1 if on_top or not dashed else 3, zorder=3 if on_top or sparse
+                             else 2,  # dashed or dotted: over the dense lines
                              drawstyle="steps-post" if steps else "default")
                 series(ax, xs[at], y[at], warm[at], **style)
                 if steps:  # the value the next row has: up or down from here
@@ -424,7 +425,7 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
         if coloured:  # one scale for every column's points; room for a right-hand axis' labels
             bar = ax.figure.colorbar(coloured[0], ax=list(dict.fromkeys((ax, top))),
                                      fraction=0.04, pad=0.12 if right else 0.03)
-            bar.ax.set_title(coloured_by[1], fontsize=7)  # above the bar: upright in any script
+            bar.ax.set_title(coloured_by[1], fontsize=8)  # above the bar: upright in any script
             bar.ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # steps: whole numbers
         handles = [h for a in dict.fromkeys((ax, top)) for h in a.get_legend_handles_labels()[0]]
         if handles and legend in ("auto", "above"):
@@ -582,7 +583,7 @@ def text(lines, title, largest=12, columns=None):
         size = min(largest, wide / (0.6 * chars), high / (1.2 * max(len(lines), 1)))
         ax.text(0, 1, "\n".join(lines), va="top", family="monospace", fontsize=size,
                 transform=ax.transAxes)
-    fill.height = min(3.3, 0.8 + 0.2 * len(lines))  # inches: a few lines leave no empty row
+    fill.height = min(3.3, 0.8 + 0.15 * len(lines))  # inches: a few lines leave no empty row
     return 1, fill
 
 
@@ -639,8 +640,8 @@ def maps_row(maps, title=""):
                 ax.plot(shown[:, 0], shown[:, 1], ".", ms=2, mew=0, color="white", alpha=0.4)
                 ax.set_xlim(extent[:2])
                 ax.set_ylim(extent[2:])
-            ax.set_xlabel(maps.get("xlabel", ""), fontsize=7)
-            ax.set_ylabel(maps.get("ylabel", ""), fontsize=7)
+            ax.set_xlabel(maps.get("xlabel", ""), fontsize=8)
+            ax.set_ylabel(maps.get("ylabel", ""), fontsize=8)
     fill.right_axis = True  # each map's colour bar and its ticks: room before the next map
     return len(panels), fill
 

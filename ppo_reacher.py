@@ -366,7 +366,7 @@ def pictures(cfg):
         [plots.spread("ratio", "r after the last update; dashed: 1 +- eps", band,
                       ylabel="r = pi / pi_old"),
          plots.lines("approx_kl", title="after the last update; dashed: target_kl, 1.5 x it",
-                     hlines=limits, ylabel="approx_kl"),
+                     hlines=limits, ylabel="approx_kl", legend="above"),
          plots.lines("clipfrac", title="after the last update", ylabel="clipfrac")]])
 
 

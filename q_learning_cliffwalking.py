@@ -229,7 +229,10 @@ def grid(maps, blank):
             rows, cols = np.unravel_index([s for s, _ in path], (4, 12))
             ax.plot(cols, rows, "-", cols[:1], rows[:1], "o", color="C3")
             ax.set(title=title, xticks=[], yticks=[], facecolor="0.8")
-            ax.set_ylabel("4 rows", fontsize=8)  # the bottom one: start, cliff, goal
+            for col, word in ((5.5, "cliff"), (11, "goal")):  # the bottom row's grey cells
+                ax.text(col, 3, word, ha="center", va="center", fontsize=7)
+            ax.set_xlabel("the dot: the start", fontsize=7)
+            ax.set_ylabel("4 x 12 grid", fontsize=7)
         axes[-1].figure.colorbar(shown, ax=axes, fraction=0.02, label="V(s) = max_a Q(s, a)")
     fill.height = 1.8  # inches: the row of flat maps, less empty room above and below them
     return len(maps), fill

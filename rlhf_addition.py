@@ -443,7 +443,7 @@ def pictures(margins):
         plots.distributions({"r(x, y_w) - r(x, y_l)": margins.numpy()}, "reward model on "
                             "held-out pairs: right of 0 (dashed), ranked right", "margin", vline=0),
         plots.lines("true_score", right=("rm_score",), right_log=False, where=("phase", "ppo"),
-                    x="kl", coloured_by=("global_step", "step"),
+                    x="kl", coloured_by=("global_step", "PPO step"),
                     x_of=lambda kl: np.sqrt(np.maximum(kl, 0)),
                     title="PPO's answers against their KL to the supervised model",
                     xlabel="sqrt(KL(pi || pi_ref)), per answer")]])
