@@ -207,7 +207,7 @@ def test_ctrl_c_keeps_the_model(tmp_path, capsys):
     assert "the run stopped in phase sft, before PPO" in shown and "\npolicy" not in shown
     assert "\nsupervised: held-out" in shown, shown
     shown = run_main("rlhf_addition.py", "--eval", run, "--lang", "zh", capsys=capsys).stdout
-    assert "还没到 PPO" in shown and "PPO 的策略" not in shown and "监督学习模型 " in shown, shown
+    assert "还没到 PPO" in shown and "PPO 的策略" not in shown and "监督模型 " in shown, shown
 
 
 def test_the_pages_numbers_are_the_records():
