@@ -348,8 +348,9 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     (first, last) env step, both drawn; `where`: (column, value), the rows whose column holds
     value (a stage's name). Against another column: `x`, each row a point, joined in the
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
-    `xlabel`: what x is; `log`: a log y axis, or "wide": one where the values drawn span a
-    factor of 10 or more, else linear (a log axis over 0.6 to 1 reads as flat); `legend`:
+    `xlabel`: what x is; `log`: a log y axis (2: ticked at powers of 2), or "wide": one where
+    the values drawn span a factor of 10 or more, else linear (a log axis over 0.6 to 1 reads
+    as flat); `legend`:
     over the axis where it fits, else in it ("auto"), "above" it always (legend_above), or
     where it goes in the axis (matplotlib's loc); `coloured_by`: (column,
     label): each row a point, not joined, coloured by that column (a colour bar, `label`, says
@@ -413,6 +414,11 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
             ax.set_ylim(*ylim)
         few_ticks(ax, ax.xaxis)
         few_ticks(ax, ax.yaxis)
+        if log == 2:  # a quantity doubled and halved (PPO-penalty's beta): ticks at powers of 2
+            from matplotlib import ticker
+            ax.yaxis.set_major_locator(ticker.LogLocator(base=2, numticks=99))
+            ax.yaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+            ax.yaxis.set_minor_locator(ticker.NullLocator())
         if title:
             ax.set_title(title, fontsize=9)
         top = ax

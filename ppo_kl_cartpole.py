@@ -275,7 +275,7 @@ def pictures(cfg):
                        [plots.lines("beta", log=True, ylabel="beta", legend="above")]], inside=[[
         plots.lines("kl", log=True, between=(lo, hi, "beta stays"),
                     title=f"KL against [d_targ / {k:g}, d_targ x {k:g}], d_targ = {cfg.d_targ:g}"),
-        plots.lines("beta", log=True, steps=True, title="beta: doubled after a KL too high, "
+        plots.lines("beta", log=2, steps=True, title="beta: doubled after a KL too high, "
                     "halved after one too low")]])
 
 

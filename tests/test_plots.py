@@ -539,6 +539,21 @@ def test_a_lone_learned_evaluation_is_a_dot(panel):
 
 
 @pytest.mark.quick
+def test_a_doubled_and_halved_quantity_is_ticked_at_powers_of_two():
+    """PPO-penalty's beta, 1/8 to 4 on a log axis: its ticks are the values it takes (the
+    default 1-2-5 ticks would show neither end)."""
+    import plots
+
+    table = dict(global_step=np.arange(1, 7.0), beta=np.array([1, 2, 4, 1, 0.25, 0.125]))
+    (ax,) = drawn(plots.lines("beta", log=2), dict(table=table, kept=[], labels={}, warm_up=0))
+    ax.figure.canvas.draw()
+    low, high = ax.get_ylim()
+    shown = [t for t in ax.get_yticks() if low <= t <= high]
+    assert {0.125, 0.25, 0.5, 1, 2, 4} <= set(shown), shown
+    assert all(np.log2(t) == round(np.log2(t)) for t in shown), shown
+
+
+@pytest.mark.quick
 def test_dashed_columns_lie_over_the_others_and_both_show_where_they_coincide():
     """DQN's two targets, equal where the online argmax and the target's agree: the dashed
     one drawn over the other, which is wider, so that its colour shows in the dashes' gaps."""
