@@ -163,9 +163,9 @@ def pictures(cfg):
     """curve.png: pi's entropy; inside.png (docs/inside.md): the variance of the gradient
     estimate with and without the baseline, V(s_t) against G_t."""
     return dict(curve=[[plots.lines("entropy")]], inside=[[
-        plots.lines("grad_var_G", "grad_var_adv", log=True, title="Var of grad J's estimates",
+        plots.lines("grad_var_G", "grad_var_adv", log=True, title="Var of grad J's two estimates",
                     ylabel="Var of the gradient estimate"),
-        plots.lines("var_ratio", hlines=(1,), title="Var with V / Var without"),
+        plots.lines("var_ratio", hlines=(1,), title="the baseline's effect; dashed: no change"),
         plots.scatters("ret", "values", "reward-to-go G_t", "V(s_t)")]])
 
 
