@@ -44,10 +44,10 @@ def main():
                 steps, values, what = curve(ex, fn, Path(tmp) / f"{bug}_{color}")
                 ax.plot(steps, values, color=color, lw=1.5, label=label)
                 print(f"{bug}: {label}: last {values[-1]:.0f}", flush=True)
-            ax.set_title(f"{bug} ({ex.script}.py, seed 0)", fontsize=9)
             ax.set_xlabel("env steps")
             ax.set_ylabel("\n".join(plots.textwrap.wrap(what, 40)), fontsize=7)
-            ax.legend(fontsize=7)
+            plots.legend_above(ax, title=f"{bug} ({ex.script}.py, seed 0)",  # over the axis:
+                               stack=True)  # the peaks stay in view
     fig.tight_layout()
     print(f"wrote {plots.save_whole(plt, fig, OUT, dpi=80)}")
 
