@@ -47,15 +47,19 @@ SCRIPT = Path(__file__).stem  # names its run folders; saved in its models (it l
 
 
 # ==== Networks ============================================================================
+def layer_init(layer, gain=np.sqrt(2)):
+    """Orthogonal weights, zero bias: the init of the PPO reference code (baselines)."""
+    nn.init.orthogonal_(layer.weight, gain)
+    nn.init.zeros_(layer.bias)
+    return layer
+
+
 def mlp(sizes, last_gain):
-    """Linear layers with tanh between them (Spinning Up's and the PPO paper's networks), each
-    with orthogonal weights and zero bias: the init of the PPO reference code (baselines)."""
+    """Linear layers with tanh between them (Spinning Up's and the PPO paper's networks)."""
     layers = []
-    for i, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
-        layers += [nn.Linear(n_in, n_out), nn.Tanh()]
-        nn.init.orthogonal_(layers[-2].weight, last_gain if i == len(sizes) - 2 else np.sqrt(2))
-        nn.init.zeros_(layers[-2].bias)
-    return nn.Sequential(*layers[:-1])  # no tanh after the last layer
+    for n_in, n_out in zip(sizes[:-2], sizes[1:-1]):
+        layers += [layer_init(nn.Linear(n_in, n_out)), nn.Tanh()]
+    return nn.Sequential(*layers, layer_init(nn.Linear(*sizes[-2:]), last_gain))
 
 
 def gaussian_log_prob(mu, log_std, act):
