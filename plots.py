@@ -350,9 +350,8 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
     log's order; `x_of`: a function of that column drawn instead (e.g. its square root);
     `xlabel`: what x is; `log`: a log y axis (2: ticked at powers of 2), or "wide": one where
     the values drawn span a factor of 10 or more, else linear (a log axis over 0.6 to 1 reads
-    as flat); `legend`:
-    over the axis where it fits, else in it ("auto"), "above" it always (legend_above), or
-    where it goes in the axis (matplotlib's loc); `coloured_by`: (column,
+    as flat); `legend`: over the axis where it fits, else in it ("auto"), "above" it always
+    (legend_above), or where it goes in the axis (matplotlib's loc); `coloured_by`: (column,
     label): each row a point, not joined, coloured by that column (a colour bar, `label`, says
     how), a marker per column (the legend's, in grey, says which)."""
     def fill(axes, logs):
@@ -395,7 +394,7 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
                 style = dict(color=color, label=labels.get(column, column), ms=3,
                              marker="o" if sparse else None, ls="--" if on_top else "-",
                              lw=1 if on_top or not dashed else 3, zorder=3 if on_top or sparse
-                             else 2,  # dashed or dotted: over the dense lines
+                             else 2,  # dashed, or drawn as points: over the dense lines
                              drawstyle="steps-post" if steps else "default")
                 series(ax, xs[at], y[at], warm[at], **style)
                 if steps:  # the value the next row has: up or down from here
@@ -413,12 +412,7 @@ def lines(*columns, title=None, ylabel=None, right=(), right_ylabel=None, right_
         if ylim is not None:
             ax.set_ylim(*ylim)
         few_ticks(ax, ax.xaxis)
-        few_ticks(ax, ax.yaxis)
-        if log == 2:  # a quantity doubled and halved (PPO-penalty's beta): ticks at powers of 2
-            from matplotlib import ticker
-            ax.yaxis.set_major_locator(ticker.LogLocator(base=2, numticks=99))
-            ax.yaxis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
-            ax.yaxis.set_minor_locator(ticker.NullLocator())
+        few_ticks(ax, ax.yaxis, base=2 if log == 2 else 10)
         if title:
             ax.set_title(title, fontsize=9)
         top = ax
@@ -455,12 +449,19 @@ def wide_enough(log, table, columns, rows):
     return bool(len(values) and values.min() > 0 and values.max() >= 10 * values.min())
 
 
-def few_ticks(ax, axis):
+def few_ticks(ax, axis, base=10):
     """As many tick labels on `axis` (ax's x or y axis) as its length holds without their
     running together: about one an inch across (env steps run to 6 digits), one per 0.4
     inch up. A log axis over less than 3 decades: its ticks at 1, 2 and 5 (1 and 3 over 2
-    decades or more) times a power of ten, written as plain numbers, the others unlabelled."""
+    decades or more) times a power of ten, written as plain numbers, the others unlabelled;
+    `base` 2: at every power of 2 (a quantity doubled and halved), as plain numbers."""
     from matplotlib import ticker
+
+    if base == 2 and axis.get_scale() == "log":
+        axis.set_major_locator(ticker.LogLocator(base=2, numticks=99))
+        axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_locator(ticker.NullLocator())
+        return
 
     box = ax.get_position()
     across = axis is ax.xaxis

@@ -277,8 +277,8 @@ def pictures(cfg):
     """curve.png: pi's entropy and approx_kl below the returns; inside.png (docs/inside.md): r
     against [1 - eps, 1 + eps], the share of the batch without gradient, r at three updates."""
     band = (1 - cfg.clip_coef, 1 + cfg.clip_coef)
-    kl = plots.lines("entropy", right=("approx_kl",), right_ylabel="approx_kl")
-    return dict(curve=[[kl]], inside=[
+    entropy_kl = plots.lines("entropy", right=("approx_kl",), right_ylabel="approx_kl")
+    return dict(curve=[[entropy_kl]], inside=[
         [plots.spread("ratio", "r = pi/pi_old after each update; dashed: 1 +- eps", band,
                       ylabel="r = pi / pi_old"),
          plots.lines("clipfrac", "clipfrac_after", "zero_grad_frac", title="share of the batch",

@@ -46,8 +46,8 @@ def main():
                 print(f"{bug}: {label}: last {values[-1]:.0f}", flush=True)
             ax.set_xlabel("env steps")
             ax.set_ylabel("\n".join(plots.textwrap.wrap(what, 40)), fontsize=7)
-            plots.legend_above(ax, title=f"{bug} ({ex.script}.py, seed 0)",  # over the axis:
-                               stack=True)  # the peaks stay in view
+            # the legend over the axis, one entry under another: the peaks stay in view
+            plots.legend_above(ax, title=f"{bug} ({ex.script}.py, seed 0)", stack=True)
     fig.tight_layout()
     print(f"wrote {plots.save_whole(plt, fig, OUT, dpi=80)}")
 
